@@ -1,0 +1,257 @@
+/* clayfit: the layered clay reflectance model (MODEL.md), evaluated in C.
+ *
+ * What the evaluator returns
+ * --------------------------
+ * The BRDF f(l, v) itself, per linear-RGB channel, in 1/sr: NOT f·cos.
+ * The radiance reflected from a light of irradiance E (measured
+ * perpendicular to the light direction) is L = f · E · c_i, c_i = n·l.
+ * On request it also returns the exact analytic derivative of every channel
+ * with respect to every entry of the parameter vector.
+ *
+ * Conventions (MODEL.md, "Conventions")
+ * -------------------------------------
+ * - n, l, v are unit vectors pointing away from the surface: the outward
+ *   normal, toward the light, toward the camera. The evaluator does not
+ *   normalise them (the CLI does); give unit vectors.
+ * - If c_i = n·l <= 0 or c_o = n·v <= 0, f = 0 (and its gradient is 0).
+ *   Likewise when c_i·c_o is below DBL_MIN (both directions within about
+ *   1e-154 of the horizon): there a narrow specular lobe exceeds the range
+ *   of double (f ~ 1/(4π c α³)) and its derivative would overflow; the
+ *   reflected radiance f·c_i of such a pair has measure zero in any image.
+ * - Roughness is perceptual: the GGX width is α = r².
+ * - F0 is the reflectance at normal incidence; η = (1 + √F0)/(1 − √F0).
+ * - Parameters are used exactly as given, never clamped. Their ranges
+ *   (cf_param_info.lower/upper, MODEL.md's fit bounds) are for the caller
+ *   and the solver to enforce; cf_params_check() tests a vector against
+ *   them. Outside the ranges the result may be meaningless or not finite.
+ *
+ * Parameter vectors
+ * -----------------
+ * A model's parameter vector is the concatenation of its parameters in the
+ * order of its CF_PARAMS_<MODEL> list below; an RGB parameter takes three
+ * consecutive entries (r, g, b). The constants CF_<MODEL>_<PARAM> give each
+ * parameter's first slot and CF_<MODEL>_DIM the length, for example for
+ * M4 (clay), dim 11:
+ *   [0..2] albedo ρ (RGB)      [3] diffuse_roughness σ (rad)
+ *   [4] film_roughness r1      [5] film_f0 F0_1
+ *   [6..8] optical_depth τ (RGB)
+ *   [9] base_roughness r2      [10] base_f0 F0_2
+ *
+ * Gradients
+ * ---------
+ * grad (when not NULL) receives 3 × dim doubles, channel-major:
+ *   grad[c * dim + k] = ∂f_c / ∂params[k],  c = 0 (R), 1 (G), 2 (B).
+ * Entries of an RGB parameter for another channel are 0.
+ */
+#ifndef CLAYFIT_MODEL_H
+#define CLAYFIT_MODEL_H
+
+#include <float.h>
+#include <stddef.h>
+
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------
+ * The parameter table: the one place that describes every parameter.
+ * X(ID, name, symbol, components, unit, default, lower, upper, meaning)
+ * name: as in MODEL.md's naming table (files, CLI, reports, presets).
+ * unit: "1" for dimensionless, "rad" for radians.
+ * default: the value used when none is given (and, later, held when a
+ *   capture does not constrain the parameter).
+ * lower, upper: MODEL.md's ranges (the fit bounds), inclusive.
+ * ------------------------------------------------------------------- */
+#define CF_PARAM_MAP(X)                                                        \
+  X(ALBEDO, "albedo", "rho", 3, "1", 0.5, 0.0, 1.0,                            \
+    "diffuse albedo of the clay body, per linear-RGB channel")                 \
+  X(DIFFUSE_ROUGHNESS, "diffuse_roughness", "sigma", 1, "rad", 0.0, 0.0, 1.2, \
+    "Oren-Nayar slope deviation of the diffuse body (0 = Lambert)")            \
+  X(ROUGHNESS, "roughness", "r", 1, "1", 0.5, 0.03, 1.0,                       \
+    "perceptual GGX roughness of the specular interface (alpha = r^2)")        \
+  X(F0, "f0", "F0", 1, "1", 0.04, 0.0, 0.25,                                   \
+    "normal-incidence Fresnel reflectance of the specular interface")          \
+  X(COAT_WEIGHT, "coat_weight", "w_c", 1, "1", 0.0, 0.0, 1.0,                  \
+    "weight of Burley's clear-coat lobe (0 = no coat; Burley 2012 default)")  \
+  X(COAT_GLOSS, "coat_gloss", "gloss", 1, "1", 1.0, 0.0, 1.0,                  \
+    "gloss of the clear-coat lobe: GTR1 width a = 0.1 - 0.099 gloss")          \
+  X(FILM_ROUGHNESS, "film_roughness", "r1", 1, "1", 0.15, 0.03, 1.0,           \
+    "perceptual GGX roughness of the film's top surface (alpha = r1^2)")       \
+  X(FILM_F0, "film_f0", "F0_1", 1, "1", 0.02, 0.01, 0.25,                      \
+    "normal-incidence reflectance of the air-to-film interface (water 0.02)") \
+  X(OPTICAL_DEPTH, "optical_depth", "tau", 3, "1", 0.1, 0.0, 8.0,              \
+    "optical depth of the film at normal incidence, per channel "              \
+    "(density x absorption)")                                                  \
+  X(BASE_ROUGHNESS, "base_roughness", "r2", 1, "1", 0.5, 0.03, 1.0,            \
+    "perceptual GGX roughness of the clay surface under the film")            \
+  X(BASE_F0, "base_f0", "F0_2", 1, "1", 0.004, 0.0, 0.25,                      \
+    "normal-incidence reflectance of the film-to-clay interface "             \
+    "(clay under water about 0.004)")
+
+typedef enum cf_param_id {
+#define CF__PARAM_ENUM(ID, ...) CF_PARAM_##ID,
+  CF_PARAM_MAP(CF__PARAM_ENUM)
+#undef CF__PARAM_ENUM
+      CF_PARAM_COUNT
+} cf_param_id;
+
+/* CF_NCOMP_<ID>: number of vector entries of a parameter (1 or 3). */
+enum {
+#define CF__PARAM_NCOMP(ID, name, symbol, ncomp, ...) CF_NCOMP_##ID = ncomp,
+  CF_PARAM_MAP(CF__PARAM_NCOMP)
+#undef CF__PARAM_NCOMP
+};
+
+/* ---------------------------------------------------------------------
+ * The model ladder (MODEL.md, "The model ladder"): each model's parameters
+ * in vector order, then X(ID, code, name, params list, summary).
+ * ------------------------------------------------------------------- */
+#define CF_PARAMS_LAMBERT(P, M) P(M, ALBEDO)
+#define CF_PARAMS_OREN_NAYAR(P, M) P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS)
+#define CF_PARAMS_DIELECTRIC(P, M) \
+  P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, ROUGHNESS) P(M, F0)
+#define CF_PARAMS_CLEARCOAT(P, M)                                          \
+  P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, ROUGHNESS) P(M, F0)            \
+  P(M, COAT_WEIGHT) P(M, COAT_GLOSS)
+#define CF_PARAMS_CLAY(P, M)                                               \
+  P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, FILM_ROUGHNESS) P(M, FILM_F0)  \
+  P(M, OPTICAL_DEPTH) P(M, BASE_ROUGHNESS) P(M, BASE_F0)
+
+#define CF_MODEL_MAP(X)                                                      \
+  X(LAMBERT, "M0", "lambert", CF_PARAMS_LAMBERT,                             \
+    "Lambertian diffuse: f = rho/pi")                                        \
+  X(OREN_NAYAR, "M1", "oren_nayar", CF_PARAMS_OREN_NAYAR,                    \
+    "Oren-Nayar qualitative diffuse (rough matte clay)")                     \
+  X(DIELECTRIC, "M2", "dielectric", CF_PARAMS_DIELECTRIC,                    \
+    "GGX specular interface over Oren-Nayar diffuse (dry or glazed clay)")   \
+  X(CLEARCOAT, "M3", "clearcoat", CF_PARAMS_CLEARCOAT,                       \
+    "M2 plus Burley's GTR1 clear-coat lobe (Burley 2012)")                   \
+  X(CLAY, "M4", "clay", CF_PARAMS_CLAY,                                      \
+    "absorbing GGX film (water/oil) over a GGX + Oren-Nayar clay body")
+
+typedef enum cf_model_id {
+#define CF__MODEL_ENUM(ID, ...) CF_MODEL_##ID,
+  CF_MODEL_MAP(CF__MODEL_ENUM)
+#undef CF__MODEL_ENUM
+      CF_MODEL_COUNT
+} cf_model_id;
+
+/* Slot constants: CF_<MODEL>_<PARAM> is the first vector entry of PARAM in
+ * MODEL's vector, CF_<MODEL>_DIM the vector's length. */
+#define CF__SLOT(MODEL, ID) \
+  CF_##MODEL##_##ID, CF__##MODEL##_##ID##_LAST = CF_##MODEL##_##ID + CF_NCOMP_##ID - 1,
+#define CF__SLOT_ENUM(ID, code, name, PARAMS, summary) \
+  enum { PARAMS(CF__SLOT, ID) CF_##ID##_DIM };
+CF_MODEL_MAP(CF__SLOT_ENUM)
+#undef CF__SLOT_ENUM
+
+/* The largest parameter vector of any model. */
+#define CF_MAX_DIM CF_CLAY_DIM
+
+typedef struct cf_param_info {
+  cf_param_id id;
+  const char *name;    /* "albedo" */
+  const char *symbol;  /* ASCII spelling of MODEL.md's symbol: "rho" */
+  int components;      /* 1 (scalar) or 3 (linear RGB) */
+  const char *unit;    /* "1" (dimensionless) or "rad" */
+  double default_value;
+  double lower, upper; /* inclusive range, MODEL.md's fit bounds */
+  const char *meaning;
+} cf_param_info;
+
+typedef struct cf_model_info {
+  cf_model_id id;
+  const char *code;    /* "M4" */
+  const char *name;    /* "clay" */
+  const char *summary;
+  int param_count;     /* number of parameters (an RGB one counts once) */
+  const cf_param_id *params; /* in vector order */
+  const int *offsets;  /* first vector slot of each parameter */
+  int dim;             /* length of the parameter vector */
+} cf_model_info;
+
+/* Table look-ups. Return NULL for an id outside the table. */
+const cf_param_info *cf_param_info_get(cf_param_id id);
+const cf_model_info *cf_model_info_get(cf_model_id id);
+
+/* Find a model by code or name, case-insensitive ("M4", "m4", "clay").
+ * Returns CF_ENOTFOUND (with a message listing the models) if unknown. */
+cf_status cf_model_find(const char *code_or_name, cf_model_id *id,
+                        cf_error *err);
+
+/* Find a parameter of a model by name. CF_ENOTFOUND (with a message listing
+ * the model's parameters) if the model has no such parameter. On success
+ * *slot is its first vector entry and *info its description. */
+cf_status cf_model_param_find(cf_model_id model, const char *name,
+                              int *slot, const cf_param_info **info,
+                              cf_error *err);
+
+/* Name of vector entry k of a model: "albedo[1]" style for RGB entries is
+ * written into buf (at least 32 bytes); returns buf. */
+const char *cf_model_slot_name(cf_model_id model, int k, char *buf,
+                               size_t size);
+
+/* Fill params (model dim entries) with every parameter's default. */
+void cf_model_default_params(cf_model_id model, double *params);
+
+/* CF_OK if every entry is finite and within its range; otherwise
+ * CF_ERANGE (or CF_EINVAL for NaN/Inf) with a message naming the entry. */
+cf_status cf_params_check(cf_model_id model, const double *params,
+                          cf_error *err);
+
+/* ---------------------------------------------------------------------
+ * Geometry: the four scalars the BRDF depends on, computed once from
+ * (n, l, v). With l_t = l − c_i n and v_t = v − c_o n (the parts of l and
+ * v tangent to the surface):
+ *   cos_i = n·l, cos_o = n·v,
+ *   t_sq  = |l_t + v_t|²  (so |l + v|² = t_sq + (cos_i + cos_o)²),
+ *   g     = l_t·v_t = l·v − c_i c_o.
+ * Every formula of MODEL.md is written in these; computing them from the
+ * tangent parts keeps the half vector's sin²θ_h accurate at a mirror
+ * configuration, and every expression is symmetric in l and v, so f is
+ * reciprocal to the last bit.
+ * ------------------------------------------------------------------- */
+typedef struct cf_geometry {
+  double cos_i, cos_o, t_sq, g;
+} cf_geometry;
+
+/* Is the pair lit and seen (f can be non-zero)? c_i > 0, c_o > 0 and
+ * c_i·c_o >= DBL_MIN (see "Conventions" above). False for NaN. */
+static inline int cf_geometry_is_lit(const cf_geometry *g) {
+  return g->cos_i > 0.0 && g->cos_o > 0.0 && g->cos_i * g->cos_o >= DBL_MIN;
+}
+
+cf_geometry cf_geometry_from_directions(const double n[3], const double l[3],
+                                        const double v[3]);
+
+/* Evaluate one observation. f receives 3 values (1/sr); grad, if not NULL,
+ * 3 × dim derivatives as described above. CF_EINVAL for an unknown model
+ * (outputs untouched); the parameters are not checked (cf_params_check). */
+cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
+                  const double l[3], const double v[3], double f[3],
+                  double *grad);
+
+/* The fitter's hot path: `count` observations with one parameter vector.
+ * Work that depends only on the parameters is done once per call.
+ *   geometry: count records (see cf_geometry_from_directions);
+ *   f:        3 × count values, f[3 i + c];
+ *   grad:     NULL, or 3 × dim × count derivatives,
+ *             grad[(3 i + c) × dim + k] = ∂f_c(obs i) / ∂params[k]
+ *             (row-major Jacobian rows, one per observation and channel). */
+cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
+                        const cf_geometry *geometry, double *f, double *grad);
+
+/* The same from directions: n, l, v are 3 × count doubles (x, y, z of
+ * observation i at [3 i .. 3 i + 2]). */
+cf_status cf_eval_batch_directions(cf_model_id model, const double *params,
+                                   size_t count, const double *n,
+                                   const double *l, const double *v,
+                                   double *f, double *grad);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_MODEL_H */

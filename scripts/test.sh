@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# The whole test suite on a fresh Debian 12 machine: installs what is
+# missing, builds, and runs every ctest test.
+#   1. Release build (warnings are errors): every test.
+#   2. AddressSanitizer + UBSan build: every test but the slow ones.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+start=$(date +%s)
+bash scripts/install-deps.sh
+jobs=$(nproc)
+
+bash scripts/build.sh release
+(cd build/release && ctest --output-on-failure -j "$jobs")
+
+bash scripts/build.sh sanitize
+(cd build/sanitize && ctest --output-on-failure -j "$jobs" -LE slow)
+
+echo "test: all passed in $(( $(date +%s) - start )) s"

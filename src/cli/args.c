@@ -1,0 +1,77 @@
+#include "args.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+cf_status cli_parse_number(const char *text, const char *what, double *out,
+                           cf_error *err) {
+  char *end = NULL;
+  errno = 0;
+  double x = strtod(text, &end);
+  if (end == text || *end != '\0')
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' is not a number", what, text);
+  if (!isfinite(x) || errno == ERANGE)
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' is not a finite number", what,
+                        text);
+  *out = x;
+  return CF_OK;
+}
+
+cf_status cli_parse_list(const char *text, const char *what, int count,
+                         double *out, cf_error *err) {
+  char buffer[512];
+  if (strlen(text) >= sizeof buffer)
+    return cf_error_set(err, CF_EINVAL, "%s: value too long", what);
+  strcpy(buffer, text);
+  int n = 0;
+  char *cursor = buffer;
+  for (;;) {
+    char *comma = strchr(cursor, ',');
+    if (comma) *comma = '\0';
+    if (n == count)
+      return cf_error_set(err, CF_EINVAL, "%s: '%s' has more than %d numbers",
+                          what, text, count);
+    cf_status s = cli_parse_number(cursor, what, &out[n], err);
+    if (s != CF_OK) return s;
+    ++n;
+    if (!comma) break;
+    cursor = comma + 1;
+  }
+  if (n != count)
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' has %d number%s, expected %d",
+                        what, text, n, n == 1 ? "" : "s", count);
+  return CF_OK;
+}
+
+cf_status cli_parse_direction(const char *text, const char *what,
+                              double out[3], cf_error *err) {
+  cf_status s = cli_parse_list(text, what, 3, out, err);
+  if (s != CF_OK) return s;
+  /* scale by the largest component first, so that no square overflows */
+  double largest = fmax(fabs(out[0]), fmax(fabs(out[1]), fabs(out[2])));
+  if (largest == 0.0)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: '%s' has zero length; a direction needs a "
+                        "non-zero length",
+                        what, text);
+  for (int k = 0; k < 3; ++k) out[k] /= largest;
+  double length = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+  for (int k = 0; k < 3; ++k) out[k] /= length;
+  return CF_OK;
+}
+
+cf_status cli_parse_count(const char *text, const char *what, long min,
+                          long max, long *out, cf_error *err) {
+  char *end = NULL;
+  errno = 0;
+  long x = strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno == ERANGE)
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' is not an integer", what, text);
+  if (x < min || x > max)
+    return cf_error_set(err, CF_ERANGE, "%s: %ld is outside [%ld, %ld]", what, x,
+                        min, max);
+  *out = x;
+  return CF_OK;
+}

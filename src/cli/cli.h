@@ -1,0 +1,26 @@
+/* The clayfit command's subcommands. Each gets argv starting at its own
+ * name and returns the process exit status:
+ *   0 success, 1 failure while running, 2 invalid command line or input. */
+#ifndef CLAYFIT_CLI_CLI_H
+#define CLAYFIT_CLI_CLI_H
+
+#include <stdio.h>
+
+enum { CLI_EXIT_OK = 0, CLI_EXIT_FAILURE = 1, CLI_EXIT_USAGE = 2 };
+
+typedef struct cli_context {
+  int quiet; /* --quiet: no progress on stderr */
+} cli_context;
+
+int cmd_eval(int argc, char **argv, cli_context *ctx);
+int cmd_models(int argc, char **argv, cli_context *ctx);
+int cmd_bench(int argc, char **argv, cli_context *ctx);
+
+/* The model ladder and every parameter (name, unit, default, range,
+ * meaning), from the single table in clayfit/model.h. */
+void cli_print_model_table(FILE *out);
+
+/* Report an error on stderr as "clayfit <command>: <message>". */
+void cli_report(const char *command, const char *message);
+
+#endif /* CLAYFIT_CLI_CLI_H */

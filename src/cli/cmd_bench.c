@@ -1,0 +1,183 @@
+/* clayfit bench eval: evaluations per second of every model, value only and
+ * value + gradient, on one thread, over a fixed random set of directions.
+ * A benchmark prints numbers; it asserts nothing. */
+#include <getopt.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "args.h"
+#include "clayfit/model.h"
+#include "cli.h"
+#include "core/rng.h"
+#include "json_out.h"
+
+enum { BENCH_SEED = 20261122 };
+
+typedef enum bench_mode { MODE_VALUE, MODE_VALUE_GRAD, MODE_DIRECTIONS_GRAD, MODE_COUNT } bench_mode;
+static const char *const mode_names[MODE_COUNT] = {
+    "value", "value+grad", "value+grad from directions"};
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+typedef struct bench_data {
+  size_t count;
+  double *n, *l, *v;       /* 3 × count each */
+  cf_geometry *geometry;   /* count */
+  double *f, *grad;        /* 3 × count, 3 × CF_MAX_DIM × count */
+} bench_data;
+
+/* Normals uniform on the sphere, l and v uniform on each normal's
+ * hemisphere: every observation is lit, none is special. */
+static int bench_data_init(bench_data *d, size_t count) {
+  d->count = count;
+  d->n = malloc(3 * count * sizeof *d->n);
+  d->l = malloc(3 * count * sizeof *d->l);
+  d->v = malloc(3 * count * sizeof *d->v);
+  d->geometry = malloc(count * sizeof *d->geometry);
+  d->f = malloc(3 * count * sizeof *d->f);
+  d->grad = malloc(3 * (size_t)CF_MAX_DIM * count * sizeof *d->grad);
+  if (!d->n || !d->l || !d->v || !d->geometry || !d->f || !d->grad) return -1;
+  cf_rng rng = cf_rng_seed(BENCH_SEED);
+  for (size_t i = 0; i < count; ++i) {
+    cf_rng_unit_vector(&rng, d->n + 3 * i);
+    cf_rng_hemisphere(&rng, d->n + 3 * i, d->l + 3 * i);
+    cf_rng_hemisphere(&rng, d->n + 3 * i, d->v + 3 * i);
+    d->geometry[i] = cf_geometry_from_directions(d->n + 3 * i, d->l + 3 * i, d->v + 3 * i);
+  }
+  return 0;
+}
+
+static void bench_data_free(bench_data *d) {
+  free(d->n); free(d->l); free(d->v); free(d->geometry); free(d->f); free(d->grad);
+}
+
+static void run_pass(const bench_data *d, cf_model_id model, const double *params,
+                     bench_mode mode) {
+  if (mode == MODE_VALUE)
+    cf_eval_batch(model, params, d->count, d->geometry, d->f, NULL);
+  else if (mode == MODE_VALUE_GRAD)
+    cf_eval_batch(model, params, d->count, d->geometry, d->f, d->grad);
+  else
+    cf_eval_batch_directions(model, params, d->count, d->n, d->l, d->v, d->f, d->grad);
+}
+
+static int compare_doubles(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+typedef struct timing {
+  double median_ns, best_ns; /* per evaluation */
+  int passes;
+} timing;
+
+/* Nanoseconds per evaluation over passes lasting min_time in all: the
+ * median, and the best pass (on a shared machine, noise only adds time). */
+static timing time_mode(const bench_data *d, cf_model_id model, const double *params,
+                        bench_mode mode, double min_time) {
+  enum { MAX_PASSES = 1000 };
+  double per_eval[MAX_PASSES];
+  run_pass(d, model, params, mode); /* warm-up */
+  int passes = 0;
+  double start = now_seconds();
+  while (passes < MAX_PASSES && (passes < 5 || now_seconds() - start < min_time)) {
+    double t0 = now_seconds();
+    run_pass(d, model, params, mode);
+    per_eval[passes++] = (now_seconds() - t0) * 1e9 / (double)d->count;
+  }
+  qsort(per_eval, (size_t)passes, sizeof per_eval[0], compare_doubles);
+  return (timing){per_eval[passes / 2], per_eval[0], passes};
+}
+
+static void bench_usage(FILE *out) {
+  fprintf(out,
+          "usage: clayfit bench eval [--count N] [--min-time SECONDS] [--json]\n\n"
+          "Times the evaluator on one thread: every model, value only and value +\n"
+          "gradient (from precomputed geometry, the fitter's hot path, and from\n"
+          "directions), over N fixed random observations (default 65536) with the\n"
+          "models' default parameters. Reports the median and the best pass over\n"
+          "passes lasting at least --min-time seconds (default 0.5) per case.\n");
+}
+
+int cmd_bench(int argc, char **argv, cli_context *ctx) {
+  static const struct option options[] = {
+      {"count", required_argument, NULL, 'c'},
+      {"min-time", required_argument, NULL, 't'},
+      {"json", no_argument, NULL, 'j'},
+      {"help", no_argument, NULL, 'h'},
+      {0}};
+  long count = 65536;
+  double min_time = 0.5;
+  int as_json = 0;
+  cf_error err = {0};
+  optind = 1;
+  opterr = 0;
+  for (int c; (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
+    cf_status s = CF_OK;
+    if (c == 'c') s = cli_parse_count(optarg, "--count", 1, 100000000, &count, &err);
+    else if (c == 't') s = cli_parse_number(optarg, "--min-time", &min_time, &err);
+    else if (c == 'j') as_json = 1;
+    else if (c == 'h') { bench_usage(stdout); return CLI_EXIT_OK; }
+    else { bench_usage(stderr); return CLI_EXIT_USAGE; }
+    if (s != CF_OK) { cli_report("bench", err.message); return CLI_EXIT_USAGE; }
+  }
+  if (optind >= argc || strcmp(argv[optind], "eval") != 0 || optind + 1 != argc) {
+    cli_report("bench", "expected 'bench eval' (the fit benchmark comes with the fitter)");
+    return CLI_EXIT_USAGE;
+  }
+  if (!(min_time >= 0.0 && min_time <= 600.0)) {
+    cli_report("bench", "--min-time must be in [0, 600] seconds");
+    return CLI_EXIT_USAGE;
+  }
+
+  bench_data d = {0};
+  if (bench_data_init(&d, (size_t)count) != 0) {
+    bench_data_free(&d);
+    cli_report("bench", "out of memory for the observations");
+    return CLI_EXIT_FAILURE;
+  }
+  json_t *rows = json_array();
+  if (!as_json)
+    printf("clayfit bench eval: %ld observations, one thread, default parameters, "
+           "passes of at least %g s in all\n%-16s %-28s %14s %12s %16s\n",
+           count, min_time, "model", "mode", "median ns/eval", "best ns/eval",
+           "median evals/s");
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
+    const cf_model_info *info = cf_model_info_get((cf_model_id)m);
+    double params[CF_MAX_DIM];
+    cf_model_default_params(info->id, params);
+    for (int mode = 0; mode < MODE_COUNT; ++mode) {
+      if (!ctx->quiet)
+        fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
+      timing t = time_mode(&d, info->id, params, (bench_mode)mode, min_time);
+      json_array_append_new(
+          rows, json_pack("{s:s, s:s, s:s, s:f, s:f, s:f, s:i}", "code", info->code,
+                          "model", info->name, "mode", mode_names[mode],
+                          "median_ns_per_eval", t.median_ns, "best_ns_per_eval",
+                          t.best_ns, "median_evals_per_second", 1e9 / t.median_ns,
+                          "passes", t.passes));
+      if (!as_json) {
+        char label[32];
+        snprintf(label, sizeof label, "%s %s", info->code, info->name);
+        printf("%-16s %-28s %14.1f %12.1f %16.3e\n", label, mode_names[mode],
+               t.median_ns, t.best_ns, 1e9 / t.median_ns);
+        fflush(stdout);
+      }
+    }
+  }
+  if (!ctx->quiet) fprintf(stderr, "\r%60s\r", "");
+  bench_data_free(&d);
+  if (as_json)
+    return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval",
+                                        "observations", (json_int_t)count, "threads", 1,
+                                        "results", rows))
+               ? CLI_EXIT_FAILURE
+               : CLI_EXIT_OK;
+  json_decref(rows);
+  return CLI_EXIT_OK;
+}

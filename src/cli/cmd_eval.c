@@ -1,0 +1,193 @@
+/* clayfit eval: the BRDF of one model for one set of directions, as JSON
+ * (schema: data_schema/eval.schema.json). */
+#include <getopt.h>
+#include <string.h>
+
+#include "args.h"
+#include "clayfit/model.h"
+#include "cli.h"
+#include "json_out.h"
+
+enum { MAX_PARAM_ASSIGNMENTS = 64 };
+
+static void eval_usage(FILE *out) {
+  fprintf(out,
+          "usage: clayfit eval --model M --light x,y,z --view x,y,z\n"
+          "                    [--normal x,y,z] [--param name=value ...] [--grad]\n\n"
+          "Prints the BRDF f(l, v) per linear-RGB channel in 1/sr (f, not "
+          "f*cos) as JSON.\n"
+          "Directions point away from the surface and are normalised; the "
+          "normal defaults\n"
+          "to 0,0,1. Parameters not given take their defaults. Roughness is "
+          "perceptual\n"
+          "(alpha = r^2). With --grad the JSON also holds df/dparameter for "
+          "every\n"
+          "parameter: gradient.NAME[c] for a scalar, gradient.NAME[c][k] = "
+          "df_c/dNAME_k\n"
+          "for an RGB one (c, k = 0 red, 1 green, 2 blue).\n\n");
+  cli_print_model_table(out);
+}
+
+/* Apply one "name=value" assignment to the parameter vector. */
+static cf_status apply_param(cf_model_id model, const char *assignment,
+                             double *params, int *given, cf_error *err) {
+  const char *equals = strchr(assignment, '=');
+  if (!equals || equals == assignment)
+    return cf_error_set(err, CF_EINVAL,
+                        "--param '%s': expected name=value (for example "
+                        "albedo=0.8,0.5,0.3 or roughness=0.4)",
+                        assignment);
+  char name[64];
+  size_t length = (size_t)(equals - assignment);
+  if (length >= sizeof name)
+    return cf_error_set(err, CF_EINVAL, "--param '%s': name too long", assignment);
+  memcpy(name, assignment, length);
+  name[length] = '\0';
+
+  int slot = 0;
+  const cf_param_info *info = NULL;
+  cf_status s = cf_model_param_find(model, name, &slot, &info, err);
+  if (s != CF_OK) return s;
+  if (given[slot])
+    return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
+
+  char what[96];
+  snprintf(what, sizeof what, "--param %s", name);
+  const char *value = equals + 1;
+  double x[3];
+  if (info->components == 3 && strchr(value, ',')) {
+    s = cli_parse_list(value, what, 3, x, err);
+  } else {
+    s = cli_parse_number(value, what, &x[0], err);
+    x[1] = x[2] = x[0];
+  }
+  if (s != CF_OK) return s;
+  for (int c = 0; c < info->components; ++c) {
+    params[slot + c] = x[c];
+    given[slot + c] = 1;
+  }
+  return CF_OK;
+}
+
+static json_t *params_json(const cf_model_info *m, const double *params) {
+  json_t *object = json_object();
+  for (int k = 0; k < m->param_count; ++k) {
+    const cf_param_info *info = cf_param_info_get(m->params[k]);
+    const double *x = params + m->offsets[k];
+    json_object_set_new(object, info->name,
+                        info->components == 3 ? json_doubles(x, 3) : json_real(x[0]));
+  }
+  return object;
+}
+
+/* gradient.NAME[c] (scalar) or gradient.NAME[c][k] (RGB), c = channel of f. */
+static json_t *gradient_json(const cf_model_info *m, const double *grad) {
+  json_t *object = json_object();
+  for (int k = 0; k < m->param_count; ++k) {
+    const cf_param_info *info = cf_param_info_get(m->params[k]);
+    int slot = m->offsets[k];
+    json_t *rows = json_array();
+    for (int c = 0; c < 3; ++c) {
+      const double *row = grad + c * m->dim + slot;
+      json_array_append_new(rows, info->components == 3 ? json_doubles(row, 3)
+                                                        : json_real(row[0]));
+    }
+    json_object_set_new(object, info->name, rows);
+  }
+  return object;
+}
+
+int cmd_eval(int argc, char **argv, cli_context *ctx) {
+  (void)ctx;
+  enum { OPT_MODEL = 'm', OPT_PARAM = 'p', OPT_LIGHT = 'l', OPT_VIEW = 'v',
+         OPT_NORMAL = 'n', OPT_GRAD = 'g', OPT_HELP = 'h' };
+  static const struct option options[] = {
+      {"model", required_argument, NULL, OPT_MODEL},
+      {"param", required_argument, NULL, OPT_PARAM},
+      {"light", required_argument, NULL, OPT_LIGHT},
+      {"view", required_argument, NULL, OPT_VIEW},
+      {"normal", required_argument, NULL, OPT_NORMAL},
+      {"grad", no_argument, NULL, OPT_GRAD},
+      {"help", no_argument, NULL, OPT_HELP},
+      {0}};
+  const char *model_text = NULL, *light_text = NULL, *view_text = NULL;
+  const char *normal_text = "0,0,1";
+  const char *assignments[MAX_PARAM_ASSIGNMENTS];
+  int assignment_count = 0, want_grad = 0;
+  optind = 1;
+  opterr = 0;
+  for (int c; (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
+    switch (c) {
+      case OPT_MODEL: model_text = optarg; break;
+      case OPT_LIGHT: light_text = optarg; break;
+      case OPT_VIEW: view_text = optarg; break;
+      case OPT_NORMAL: normal_text = optarg; break;
+      case OPT_GRAD: want_grad = 1; break;
+      case OPT_PARAM:
+        if (assignment_count == MAX_PARAM_ASSIGNMENTS) {
+          cli_report("eval", "too many --param options");
+          return CLI_EXIT_USAGE;
+        }
+        assignments[assignment_count++] = optarg;
+        break;
+      case OPT_HELP: eval_usage(stdout); return CLI_EXIT_OK;
+      default: {
+        char message[160];
+        snprintf(message, sizeof message,
+                 "unknown option or missing value in '%s' (see clayfit eval --help)",
+                 argv[optind - 1]);
+        cli_report("eval", message);
+        return CLI_EXIT_USAGE;
+      }
+    }
+  }
+  if (optind < argc) {
+    char message[160];
+    snprintf(message, sizeof message, "unexpected argument '%s'", argv[optind]);
+    cli_report("eval", message);
+    return CLI_EXIT_USAGE;
+  }
+  if (!model_text || !light_text || !view_text) {
+    cli_report("eval", "--model, --light and --view are required (see clayfit eval --help)");
+    return CLI_EXIT_USAGE;
+  }
+
+  cf_error err = {0};
+  cf_model_id model;
+  double params[CF_MAX_DIM];
+  int given[CF_MAX_DIM] = {0};
+  double n[3], l[3], v[3];
+  cf_status s = cf_model_find(model_text, &model, &err);
+  if (s == CF_OK) cf_model_default_params(model, params);
+  for (int k = 0; s == CF_OK && k < assignment_count; ++k)
+    s = apply_param(model, assignments[k], params, given, &err);
+  if (s == CF_OK) s = cf_params_check(model, params, &err);
+  if (s == CF_OK) s = cli_parse_direction(light_text, "--light", l, &err);
+  if (s == CF_OK) s = cli_parse_direction(view_text, "--view", v, &err);
+  if (s == CF_OK) s = cli_parse_direction(normal_text, "--normal", n, &err);
+  if (s != CF_OK) {
+    cli_report("eval", err.message);
+    return CLI_EXIT_USAGE;
+  }
+
+  const cf_model_info *m = cf_model_info_get(model);
+  double f[3], grad[3 * CF_MAX_DIM];
+  cf_eval(model, params, n, l, v, f, want_grad ? grad : NULL);
+  cf_geometry g = cf_geometry_from_directions(n, l, v);
+
+  json_t *doc = json_object();
+  json_object_set_new(doc, "model", json_string(m->name));
+  json_object_set_new(doc, "code", json_string(m->code));
+  json_object_set_new(doc, "quantity", json_string("BRDF f(l, v), not f*cos"));
+  json_object_set_new(doc, "unit", json_string("1/sr"));
+  json_object_set_new(doc, "normal", json_doubles(n, 3));
+  json_object_set_new(doc, "light", json_doubles(l, 3));
+  json_object_set_new(doc, "view", json_doubles(v, 3));
+  json_object_set_new(doc, "cos_i", json_real(g.cos_i));
+  json_object_set_new(doc, "cos_o", json_real(g.cos_o));
+  json_object_set_new(doc, "lit", json_boolean(cf_geometry_is_lit(&g)));
+  json_object_set_new(doc, "params", params_json(m, params));
+  json_object_set_new(doc, "value", json_doubles(f, 3));
+  if (want_grad) json_object_set_new(doc, "gradient", gradient_json(m, grad));
+  return json_print(stdout, doc) ? CLI_EXIT_FAILURE : CLI_EXIT_OK;
+}

@@ -1,0 +1,68 @@
+/* clayfit: measure what clay looks like. Dispatches to the subcommands. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+typedef struct command {
+  const char *name;
+  int (*run)(int argc, char **argv, cli_context *ctx);
+  const char *summary;
+} command;
+
+static const command commands[] = {
+    {"eval", cmd_eval, "evaluate the BRDF (and its gradient) for one set of directions"},
+    {"models", cmd_models, "list the model ladder and every parameter's unit and range"},
+    {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
+};
+enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };
+
+void cli_report(const char *command_name, const char *message) {
+  fprintf(stderr, "clayfit %s: %s\n", command_name, message);
+}
+
+static void usage(FILE *out) {
+  fprintf(out,
+          "usage: clayfit [--quiet] <command> [options]\n"
+          "       clayfit <command> --help\n\n"
+          "commands:\n");
+  for (int k = 0; k < COMMAND_COUNT; ++k)
+    fprintf(out, "  %-8s %s\n", commands[k].name, commands[k].summary);
+  fprintf(out,
+          "\noptions:\n"
+          "  --quiet    no progress output on stderr\n"
+          "  --version  print the version\n"
+          "  --help     this text\n\n"
+          "exit status: 0 success, 1 failure while running, 2 invalid "
+          "command line or input\n");
+}
+
+int main(int argc, char **argv) {
+  cli_context ctx = {0};
+  int first = 1;
+  for (; first < argc && argv[first][0] == '-'; ++first) {
+    if (strcmp(argv[first], "--quiet") == 0 || strcmp(argv[first], "-q") == 0) {
+      ctx.quiet = 1;
+    } else if (strcmp(argv[first], "--version") == 0) {
+      printf("clayfit %s\n", CLAYFIT_VERSION);
+      return CLI_EXIT_OK;
+    } else if (strcmp(argv[first], "--help") == 0 || strcmp(argv[first], "-h") == 0) {
+      usage(stdout);
+      return CLI_EXIT_OK;
+    } else {
+      fprintf(stderr, "clayfit: unknown option '%s'\n\n", argv[first]);
+      usage(stderr);
+      return CLI_EXIT_USAGE;
+    }
+  }
+  if (first == argc) {
+    usage(stderr);
+    return CLI_EXIT_USAGE;
+  }
+  for (int k = 0; k < COMMAND_COUNT; ++k)
+    if (strcmp(argv[first], commands[k].name) == 0)
+      return commands[k].run(argc - first, argv + first, &ctx);
+  fprintf(stderr, "clayfit: unknown command '%s'\n\n", argv[first]);
+  usage(stderr);
+  return CLI_EXIT_USAGE;
+}

@@ -1,0 +1,243 @@
+/* M4 clay: a thin absorbing film (water, oil) over the clay body
+ * (MODEL.md, "M4: the two-layer clay model", steps 1-8):
+ *
+ *   f = S(F0_1, r1; l, v) + T(c_i) T(c_o) a f_base / η1²
+ *   f_base = S(F0_2, r2; l', v') + K (1 − F(F0_2, c_i'))(1 − F(F0_2, c_o')) ON(ρ, σ; l', v')
+ *
+ * Every quantity of the film depends on F0_1 through η1; derivatives with
+ * respect to F0_1 are written d_<name> (∂<name>/∂F0_1) and chained by hand.
+ *
+ * In the film, with l' = (l − c_i n)/η1 + c_i' n (step 3), the tangent
+ * parts scale by 1/η1, so the invariants of the refracted pair are
+ *   c_i', c_o',  t'² = t²/η1²,  g' = l'·v' − c_i' c_o' = g/η1²,
+ * and the base needs no vectors. */
+#include "models.h"
+
+enum { DIM = CF_CLAY_DIM };
+
+static void clay_prepare(const double *params, cf_prepared *prep) {
+  cf_clay_prep *p = &prep->clay;
+  double sigma = params[CF_CLAY_DIFFUSE_ROUGHNESS];
+  double r1 = params[CF_CLAY_FILM_ROUGHNESS];
+  double r2 = params[CF_CLAY_BASE_ROUGHNESS];
+  p->on = oren_nayar_coeffs(sigma);
+  p->a2_1 = (r1 * r1) * (r1 * r1);
+  p->inv_a2_1 = 1.0 / p->a2_1;
+  p->da2_1 = 4.0 * r1 * r1 * r1;
+  p->a2_2 = (r2 * r2) * (r2 * r2);
+  p->inv_a2_2 = 1.0 / p->a2_2;
+  p->da2_2 = 4.0 * r2 * r2 * r2;
+  p->f0_2 = params[CF_CLAY_BASE_F0];
+
+  /* step 1: η1 = (1 + √F0_1)/(1 − √F0_1), in s = √F0_1 (ds/dF0_1 = 1/(2s);
+   * F0_1 >= 0.01 keeps s >= 0.1) */
+  double f0_1 = params[CF_CLAY_FILM_F0];
+  double s = sqrt(f0_1);
+  double ds = 0.5 / s;
+  double one_p = 1.0 + s, one_m = 1.0 - s;
+  p->f0_1 = f0_1;
+  p->inv_eta = one_m / one_p;
+  p->d_inv_eta = -2.0 / (one_p * one_p) * ds;
+  p->inv_eta2 = p->inv_eta * p->inv_eta;
+  p->d_inv_eta2 = 2.0 * p->inv_eta * p->d_inv_eta;
+  p->eta2_m1 = 4.0 * s / (one_m * one_m);
+  p->d_eta2_m1 = 4.0 * one_p / (one_m * one_m * one_m) * ds;
+
+  /* step 6: F̄_i = 1 − (1 − F̄_e)/η1², F̄_e = F0_1 + (1 − F0_1)/21, so
+   * (1 − F̄_e)/η1² = (20/21)(1 − s)³/(1 + s); K = 1/(1 − ρ F̄_i e^{−4τ}) */
+  double fbar_i = 1.0 - (20.0 / 21.0) * one_m * one_m * one_m / one_p;
+  double d_fbar_i =
+      (20.0 / 21.0) * one_m * one_m * (4.0 + 2.0 * s) / (one_p * one_p) * ds;
+  for (int c = 0; c < 3; ++c) {
+    double rho = params[CF_CLAY_ALBEDO + c];
+    double tau = params[CF_CLAY_OPTICAL_DEPTH + c];
+    double e4 = exp(-4.0 * tau);
+    double x = rho * fbar_i * e4;
+    double k = 1.0 / (1.0 - x);
+    p->rho[c] = rho;
+    p->tau[c] = tau;
+    p->k[c] = k;
+    p->dk_df0_1[c] = k * k * rho * e4 * d_fbar_i;
+    p->dk_dtau[c] = -4.0 * x * k * k;
+  }
+}
+
+/* Steps 2 and 5: refracted cosine c' = sqrt((η1² − 1) + c²)/η1, without
+ * the cancellation of sqrt(1 − (1 − c²)/η1²), its reciprocal (the path
+ * length in the film) and its ∂/∂F0_1. With ρ = sqrt(η1² − 1 + c²),
+ * c' = ρ/η1, 1/ρ = (1/η1)/c'. */
+typedef struct refracted_cos {
+  double c, inv_c, d_c;
+} refracted_cos;
+
+static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
+  refracted_cos r;
+  double root = sqrt(p->eta2_m1 + c * c);
+  r.c = root * p->inv_eta;
+  r.inv_c = 1.0 / r.c;
+  double inv_root = p->inv_eta * r.inv_c;
+  r.d_c = 0.5 * p->inv_eta * p->d_eta2_m1 * inv_root + root * p->d_inv_eta;
+  return r;
+}
+
+CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
+                             double f[3], double *grad, cf_clay_terms *terms) {
+  const double c_i = g->cos_i, c_o = g->cos_o;
+
+  /* step 8, first term: the film's top specular, in air */
+  cf_half_vector h = half_vector(g->t_sq, c_i + c_o);
+  double weight_d = schlick_weight(h.c_d);
+  double fresnel_1 = fresnel_schlick(p->f0_1, weight_d);
+  cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, h.sin2_h, h.cos2_h);
+  cf_smith_v v1 = smith_ggx_v(p->a2_1, c_i, c_o);
+  double top = fresnel_1 * d1.value * v1.value;
+
+  /* step 4: T(c_i) T(c_o), T(c) = (1 − F0_1)(1 − (1 − c)^5) */
+  double w = (1.0 - schlick_weight(c_i)) * (1.0 - schlick_weight(c_o));
+  double one_minus_f0_1 = 1.0 - p->f0_1;
+  double transmission = one_minus_f0_1 * one_minus_f0_1 * w;
+
+  /* steps 2-3: the refracted pair's invariants */
+  refracted_cos ri = refract_cos(p, c_i), ro = refract_cos(p, c_o);
+  double t_sq_b = g->t_sq * p->inv_eta2;
+  double g_b = g->g * p->inv_eta2;
+  cf_half_vector hb = half_vector(t_sq_b, ri.c + ro.c);
+
+  /* step 5: path factor 1/c_i' + 1/c_o' of the absorption */
+  double path = ri.inv_c + ro.inv_c;
+
+  /* step 7: the base's specular and diffuse lobes, in the film */
+  double weight_db = schlick_weight(hb.c_d);
+  double fresnel_2 = fresnel_schlick(p->f0_2, weight_db);
+  cf_ggx_d d2 = ggx_d(p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h);
+  cf_smith_v v2 = smith_ggx_v(p->a2_2, ri.c, ro.c);
+  double base_specular = fresnel_2 * d2.value * v2.value;
+  double one_minus_f0_2 = 1.0 - p->f0_2;
+  double weight_ib = schlick_weight(ri.c), weight_ob = schlick_weight(ro.c);
+  double w_b = (1.0 - weight_ib) * (1.0 - weight_ob);
+  double transmission_b = one_minus_f0_2 * one_minus_f0_2 * w_b;
+  const refracted_cos *larger = ri.c > ro.c ? &ri : &ro; /* max(c_i', c_o') */
+  double x = g_b > 0.0 ? g_b * larger->inv_c : 0.0;     /* ON's angular factor */
+  double on = (p->on.a + p->on.b * x) * CF_INV_PI; /* ON / ρ */
+
+  /* step 8: combine per channel; phi = T T a / η1² */
+  double absorption[3], phi[3], base[3];
+  double phi_unit = transmission * p->inv_eta2, diffuse_unit = transmission_b * on;
+  for (int c = 0; c < 3; ++c) {
+    absorption[c] = exp(-p->tau[c] * path);
+    phi[c] = phi_unit * absorption[c];
+    base[c] = base_specular + p->k[c] * p->rho[c] * diffuse_unit;
+    f[c] = top + phi[c] * base[c];
+  }
+  if (terms) {
+    terms->top = top;
+    terms->transmission = transmission;
+    terms->inv_eta2 = p->inv_eta2;
+    for (int c = 0; c < 3; ++c) {
+      terms->absorption[c] = absorption[c];
+      terms->recycling[c] = p->k[c];
+      terms->base[c] = base[c];
+    }
+  }
+  if (!grad) return;
+
+  /* ---- derivatives ---- */
+  /* top lobe */
+  double dtop_dr1 =
+      fresnel_1 * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
+  double dtop_df0_1 = (1.0 - weight_d) * d1.value * v1.value;
+  double dtransmission = -2.0 * one_minus_f0_1 * w;
+
+  /* ∂/∂F0_1 of the refracted invariants */
+  double d_path = -ri.d_c * ri.inv_c * ri.inv_c - ro.d_c * ro.inv_c * ro.inv_c;
+  double d_t_sq_b = g->t_sq * p->d_inv_eta2;
+  double d_g_b = g->g * p->d_inv_eta2;
+  double d_sum_b = ri.d_c + ro.d_c;
+  double d_s_sq_b = d_t_sq_b + 2.0 * (ri.c + ro.c) * d_sum_b;
+  double d_sin2_b = (d_t_sq_b - hb.sin2_h * d_s_sq_b) * hb.inv_s_sq;
+  /* c_d' = sqrt(s'²)/2, so ∂c_d' = ∂s'² / (8 c_d') = ∂s'² c_d' / (2 s'²) */
+  double d_c_d_b = 0.5 * d_s_sq_b * hb.c_d * hb.inv_s_sq;
+
+  /* base specular: through F(c_d'), D(sin²θ_h') and V(c_i', c_o') */
+  double dbase_spec_df0_1 =
+      (1.0 - p->f0_2) * schlick_weight_dc(hb.c_d) * d_c_d_b * d2.value * v2.value +
+      fresnel_2 * d2.d_sin2 * d_sin2_b * v2.value +
+      fresnel_2 * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
+  double dbase_spec_dr2 =
+      fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
+  double dbase_spec_df0_2 = (1.0 - weight_db) * d2.value * v2.value;
+
+  /* base diffuse: transmissions into the clay, and the angular factor */
+  double dtransmission_b_df0_1 =
+      one_minus_f0_2 * one_minus_f0_2 *
+      (-schlick_weight_dc(ri.c) * ri.d_c * (1.0 - weight_ob) -
+       (1.0 - weight_ib) * schlick_weight_dc(ro.c) * ro.d_c);
+  double dtransmission_b_df0_2 = -2.0 * one_minus_f0_2 * w_b;
+  double dx_df0_1 = 0.0;
+  if (g_b > 0.0)
+    dx_df0_1 = (d_g_b - g_b * larger->d_c * larger->inv_c) * larger->inv_c;
+  double don_df0_1 = p->on.b * dx_df0_1 * CF_INV_PI;
+  double don_dsigma = (p->on.d_a + p->on.d_b * x) * CF_INV_PI;
+
+  /* channel-independent factors of the rows below (diffuse_unit = ∂base/∂(Kρ),
+   * phi_unit = phi/a) */
+  double ddiffuse_unit_df0_1 = dtransmission_b_df0_1 * on + transmission_b * don_df0_1;
+  double dphi_unit_df0_1 = dtransmission * p->inv_eta2 + transmission * p->d_inv_eta2;
+  for (int c = 0; c < 3; ++c) {
+    double *row = grad + c * DIM;
+    double k = p->k[c], k_rho = k * p->rho[c];
+    double diffuse_b = diffuse_unit * p->rho[c]; /* K-free base diffuse */
+    double dphi_df0_1 = absorption[c] * (dphi_unit_df0_1 - phi_unit * p->tau[c] * d_path);
+    double dbase_df0_1 =
+        dbase_spec_df0_1 + p->dk_df0_1[c] * diffuse_b + k_rho * ddiffuse_unit_df0_1;
+
+    /* ∂(K ρ)/∂ρ = K² (K = 1/(1 − ρ F̄_i e^{−4τ})) */
+    row[CF_CLAY_ALBEDO + c] = phi[c] * diffuse_unit * k * k;
+    row[CF_CLAY_DIFFUSE_ROUGHNESS] = phi[c] * k_rho * transmission_b * don_dsigma;
+    row[CF_CLAY_FILM_ROUGHNESS] = dtop_dr1;
+    row[CF_CLAY_FILM_F0] = dtop_df0_1 + dphi_df0_1 * base[c] + phi[c] * dbase_df0_1;
+    row[CF_CLAY_OPTICAL_DEPTH + c] =
+        phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
+    row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
+    row[CF_CLAY_BASE_F0] =
+        phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
+  }
+}
+
+static void clay_value(const cf_prepared *prep, const cf_geometry *g,
+                       double f[3]) {
+  if (!cf_geometry_is_lit(g)) {
+    cf_zero_output(f, NULL, DIM);
+    return;
+  }
+  clay_eval(&prep->clay, g, f, NULL, NULL);
+}
+
+static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g,
+                            double f[3], double *grad) {
+  if (!cf_geometry_is_lit(g)) {
+    cf_zero_output(f, grad, DIM);
+    return;
+  }
+  /* clay_eval writes every entry but the other channels' albedo and
+   * optical depth */
+  for (int c = 0; c < 3; ++c) {
+    for (int k = 1; k < 3; ++k) {
+      grad[c * DIM + CF_CLAY_ALBEDO + (c + k) % 3] = 0.0;
+      grad[c * DIM + CF_CLAY_OPTICAL_DEPTH + (c + k) % 3] = 0.0;
+    }
+  }
+  clay_eval(&prep->clay, g, f, grad, NULL);
+}
+
+void cf_clay_terms_eval(const double *params, const cf_geometry *g,
+                        cf_clay_terms *terms) {
+  *terms = (cf_clay_terms){0};
+  if (!cf_geometry_is_lit(g)) return;
+  cf_prepared prep;
+  clay_prepare(params, &prep);
+  double f[3];
+  clay_eval(&prep.clay, g, f, NULL, terms);
+}
+
+const cf_model_impl cf_clay_impl = {clay_prepare, clay_value, clay_value_grad};

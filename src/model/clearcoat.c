@@ -1,0 +1,63 @@
+/* M3 clearcoat (MODEL.md, "The model ladder"; Burley 2012, B.2):
+ *   f = M2 + w_c · 0.25 · F(0.04, c_d) · D1(a, c_h) · Vs(0.25; c_i, c_o),
+ *   a = 0.1 + (0.001 − 0.1) gloss.
+ * Burley's coat adds energy on top of M2 (MODEL.md, "Energy"). */
+#include "models.h"
+
+enum { DIM = CF_CLEARCOAT_DIM };
+
+/* Burley's fixed constants: the coat's F0 (IOR 1.5), its visibility width
+ * α_g = 0.25 and the 0.25 weight of the disney_brdf reference shader. */
+static const double coat_f0 = 0.04;
+static const double coat_visibility_a2 = 0.25 * 0.25;
+static const double coat_scale = 0.25;
+
+static void clearcoat_prepare(const double *params, cf_prepared *prep) {
+  cf_clearcoat_prep *p = &prep->clearcoat;
+  cf_dielectric_prepare(params, &p->dielectric);
+  double gloss = params[CF_CLEARCOAT_COAT_GLOSS];
+  double a = 0.1 + (0.001 - 0.1) * gloss;
+  p->weight = params[CF_CLEARCOAT_COAT_WEIGHT];
+  p->a2 = a * a;
+  p->log_a2 = log(p->a2);
+  p->da2_dgloss = 2.0 * a * (0.001 - 0.1);
+}
+
+CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p,
+                                  const cf_geometry *g, double f[3],
+                                  double *grad) {
+  cf_half_vector h = half_vector(g->t_sq, g->cos_i + g->cos_o);
+  cf_dielectric_eval(&p->dielectric, g, &h, f, grad, DIM);
+  double fresnel = fresnel_schlick(coat_f0, schlick_weight(h.c_d));
+  cf_gtr1 d1 = gtr1_d(p->a2, p->log_a2, h.sin2_h, h.cos2_h);
+  double vis = smith_ggx_separable(coat_visibility_a2, g->cos_i, g->cos_o);
+  double unit_coat = coat_scale * fresnel * d1.value * vis; /* w_c = 1 */
+  double coat = p->weight * unit_coat;
+  for (int c = 0; c < 3; ++c) f[c] += coat;
+  if (!grad) return;
+  double dcoat_dgloss =
+      p->weight * coat_scale * fresnel * vis * d1.d_a2 * p->da2_dgloss;
+  for (int c = 0; c < 3; ++c) {
+    grad[c * DIM + CF_CLEARCOAT_COAT_WEIGHT] = unit_coat;
+    grad[c * DIM + CF_CLEARCOAT_COAT_GLOSS] = dcoat_dgloss;
+  }
+}
+
+static void clearcoat_value(const cf_prepared *prep, const cf_geometry *g,
+                            double f[3]) {
+  if (!cf_geometry_is_lit(g)) {
+    cf_zero_output(f, NULL, DIM);
+    return;
+  }
+  clearcoat_eval(&prep->clearcoat, g, f, NULL);
+}
+
+static void clearcoat_value_grad(const cf_prepared *prep, const cf_geometry *g,
+                                 double f[3], double *grad) {
+  cf_zero_output(f, grad, DIM);
+  if (!cf_geometry_is_lit(g)) return;
+  clearcoat_eval(&prep->clearcoat, g, f, grad);
+}
+
+const cf_model_impl cf_clearcoat_impl = {clearcoat_prepare, clearcoat_value,
+                                         clearcoat_value_grad};

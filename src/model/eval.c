@@ -1,0 +1,58 @@
+/* The evaluator's entry points: one observation, or a batch with one
+ * parameter vector (the fitter's hot path). */
+#include "models.h"
+
+static const cf_model_impl *const impls[CF_MODEL_COUNT] = {
+    [CF_MODEL_LAMBERT] = &cf_lambert_impl,
+    [CF_MODEL_OREN_NAYAR] = &cf_oren_nayar_impl,
+    [CF_MODEL_DIELECTRIC] = &cf_dielectric_impl,
+    [CF_MODEL_CLEARCOAT] = &cf_clearcoat_impl,
+    [CF_MODEL_CLAY] = &cf_clay_impl,
+};
+
+static const cf_model_impl *impl_of(cf_model_id model) {
+  if ((int)model < 0 || model >= CF_MODEL_COUNT) return NULL;
+  return impls[model];
+}
+
+cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
+                  const double l[3], const double v[3], double f[3],
+                  double *grad) {
+  cf_geometry g = cf_geometry_from_directions(n, l, v);
+  return cf_eval_batch(model, params, 1, &g, f, grad);
+}
+
+cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
+                        const cf_geometry *geometry, double *f, double *grad) {
+  const cf_model_impl *impl = impl_of(model);
+  if (!impl) return CF_EINVAL;
+  cf_prepared prep;
+  impl->prepare(params, &prep);
+  if (!grad) {
+    for (size_t i = 0; i < count; ++i) impl->value(&prep, &geometry[i], f + 3 * i);
+    return CF_OK;
+  }
+  const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
+  for (size_t i = 0; i < count; ++i)
+    impl->value_grad(&prep, &geometry[i], f + 3 * i, grad + row * i);
+  return CF_OK;
+}
+
+cf_status cf_eval_batch_directions(cf_model_id model, const double *params,
+                                   size_t count, const double *n,
+                                   const double *l, const double *v,
+                                   double *f, double *grad) {
+  const cf_model_impl *impl = impl_of(model);
+  if (!impl) return CF_EINVAL;
+  cf_prepared prep;
+  impl->prepare(params, &prep);
+  const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
+  for (size_t i = 0; i < count; ++i) {
+    cf_geometry g = cf_geometry_from_directions(n + 3 * i, l + 3 * i, v + 3 * i);
+    if (grad)
+      impl->value_grad(&prep, &g, f + 3 * i, grad + row * i);
+    else
+      impl->value(&prep, &g, f + 3 * i);
+  }
+  return CF_OK;
+}

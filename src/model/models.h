@@ -1,0 +1,88 @@
+/* The models of the ladder behind one interface: what each precomputes
+ * from its parameters once per call (prepare), and its value and
+ * value-plus-gradient for one observation. Private to src/model. */
+#ifndef CLAYFIT_MODEL_MODELS_H
+#define CLAYFIT_MODEL_MODELS_H
+
+#include "clayfit/model.h"
+#include "terms.h"
+
+/* M0 and the diffuse part of M1-M3: ρ/π and the Oren-Nayar coefficients. */
+typedef struct cf_diffuse_prep {
+  double rho_over_pi[3];
+  cf_oren_nayar_coeffs on;
+} cf_diffuse_prep;
+
+/* M2: the diffuse prep plus the specular interface. */
+typedef struct cf_dielectric_prep {
+  cf_diffuse_prep diffuse;
+  double f0, a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
+} cf_dielectric_prep;
+
+/* M3: M2 plus the coat (a = 0.1 − 0.099 gloss). */
+typedef struct cf_clearcoat_prep {
+  cf_dielectric_prep dielectric;
+  double weight, a2, log_a2, da2_dgloss;
+} cf_clearcoat_prep;
+
+/* M4: everything that depends on the parameters only. Derivatives with
+ * respect to the film's F0_1 are prefixed d_ (∂/∂F0_1). */
+typedef struct cf_clay_prep {
+  double rho[3];
+  cf_oren_nayar_coeffs on;
+  double f0_1, a2_1, inv_a2_1, da2_1; /* top interface */
+  double inv_eta, d_inv_eta;      /* 1/η1 */
+  double inv_eta2, d_inv_eta2;    /* 1/η1² */
+  double eta2_m1, d_eta2_m1;      /* η1² − 1 = 4√F0_1/(1 − √F0_1)² */
+  double tau[3];
+  double k[3], dk_df0_1[3], dk_dtau[3]; /* recycling K per channel */
+  double f0_2, a2_2, inv_a2_2, da2_2; /* base interface */
+} cf_clay_prep;
+
+typedef union cf_prepared {
+  cf_diffuse_prep diffuse;
+  cf_dielectric_prep dielectric;
+  cf_clearcoat_prep clearcoat;
+  cf_clay_prep clay;
+} cf_prepared;
+
+typedef struct cf_model_impl {
+  void (*prepare)(const double *params, cf_prepared *prep);
+  void (*value)(const cf_prepared *prep, const cf_geometry *g, double f[3]);
+  /* grad: 3 × dim, channel-major (model.h) */
+  void (*value_grad)(const cf_prepared *prep, const cf_geometry *g,
+                     double f[3], double *grad);
+} cf_model_impl;
+
+extern const cf_model_impl cf_lambert_impl;
+extern const cf_model_impl cf_oren_nayar_impl;
+extern const cf_model_impl cf_dielectric_impl;
+extern const cf_model_impl cf_clearcoat_impl;
+extern const cf_model_impl cf_clay_impl;
+
+/* Shared preparation of the diffuse body and the M2 interface (M1-M3). */
+void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p);
+void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
+
+/* M2 with its gradient written into rows of length `dim` (M3 reuses it
+ * with dim 8); grad may be NULL. The observation must be lit. */
+void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
+                        const cf_half_vector *h, double f[3], double *grad,
+                        int dim);
+
+/* M4 taken apart (MODEL.md step 8), for tests and reports:
+ *   f_c = top + transmission · absorption_c · inv_eta2 · base_c. */
+typedef struct cf_clay_terms {
+  double top;           /* S(F0_1, r1; l, v) */
+  double transmission;  /* T(c_i) T(c_o) */
+  double inv_eta2;      /* 1/η1² */
+  double absorption[3]; /* a = exp(−τ (1/c_i' + 1/c_o')) */
+  double recycling[3];  /* K */
+  double base[3];       /* f_base */
+} cf_clay_terms;
+
+/* All zero where the observation is not lit. */
+void cf_clay_terms_eval(const double *params, const cf_geometry *g,
+                        cf_clay_terms *terms);
+
+#endif /* CLAYFIT_MODEL_MODELS_H */

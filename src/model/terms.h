@@ -1,0 +1,172 @@
+/* The building blocks of MODEL.md ("Building blocks"), one small function a
+ * term, each with the partial derivatives the models chain together.
+ * Private to src/model. Pure C11 + libm. */
+#ifndef CLAYFIT_MODEL_TERMS_H
+#define CLAYFIT_MODEL_TERMS_H
+
+#include <float.h>
+#include <math.h>
+
+#include "clayfit/model.h"
+
+#define CF_PI 3.14159265358979323846
+#define CF_INV_PI 0.31830988618379067154
+
+/* The models' per-observation bodies are written once with an optional
+ * gradient and must be inlined into their value-only and value+gradient
+ * callers, so that the value-only path drops the derivative work. */
+#if defined(__GNUC__)
+#define CF_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define CF_ALWAYS_INLINE static inline
+#endif
+
+/* Zero a value triple and, if requested, its 3 × dim gradient. */
+static inline void cf_zero_output(double f[3], double *grad, int dim) {
+  f[0] = f[1] = f[2] = 0.0;
+  if (grad)
+    for (int k = 0; k < 3 * dim; ++k) grad[k] = 0.0;
+}
+
+/* ---- Schlick's Fresnel: F(F0, c) = F0 + (1 − F0)(1 − c)^5, c in [0, 1]
+ * (Schlick 1994 eq. 24). schlick_weight is (1 − c)^5 with c clamped;
+ * schlick_weight_dc its derivative in c (0 where the clamp is active). */
+static inline double schlick_weight(double c) {
+  double x = 1.0 - c;
+  x = x > 0.0 ? x : 0.0; /* ternaries, not fmin/fmax: these compile to */
+  x = x < 1.0 ? x : 1.0; /* one instruction each */
+  double x2 = x * x;
+  return x2 * x2 * x;
+}
+
+static inline double schlick_weight_dc(double c) {
+  double x = 1.0 - c;
+  double x2 = x * x;
+  return (x > 0.0 && x < 1.0) ? -5.0 * x2 * x2 : 0.0;
+}
+
+static inline double fresnel_schlick(double f0, double weight) {
+  return f0 + (1.0 - f0) * weight;
+}
+
+/* ---- The half vector of a pair of directions, from the tangent-space
+ * invariants: |l + v|² = t² + (c_i + c_o)², sin²θ_h = t²/|l + v|²,
+ * cos²θ_h = (c_i + c_o)²/|l + v|², c_d = |l + v|/2 = v·h = l·h. */
+typedef struct cf_half_vector {
+  double s_sq;   /* |l + v|² */
+  double inv_s_sq; /* 1 / |l + v|² */
+  double sin2_h; /* sin²θ_h */
+  double cos2_h; /* cos²θ_h */
+  double c_d;    /* |l + v| / 2 */
+} cf_half_vector;
+
+static inline cf_half_vector half_vector(double t_sq, double c_sum) {
+  cf_half_vector h;
+  double c_sum_sq = c_sum * c_sum;
+  h.s_sq = t_sq + c_sum_sq;
+  h.inv_s_sq = 1.0 / h.s_sq;
+  h.sin2_h = t_sq * h.inv_s_sq;
+  h.cos2_h = c_sum_sq * h.inv_s_sq;
+  h.c_d = 0.5 * sqrt(h.s_sq);
+  return h;
+}
+
+/* ---- GGX / Trowbridge-Reitz distribution (Walter et al. 2007 eq. 33):
+ *   D(α, c_h) = α² / (π ((α² − 1) c_h² + 1)²) = α² / (π (sin²θ_h + α² cos²θ_h)²)
+ * The second form has no cancellation at the peak (sin²θ_h → 0).
+ * inv_a2 = 1/α² (a property of the parameters, computed once).
+ * d_a2:   ∂D/∂(α²);
+ * d_sin2: ∂D/∂sin²θ_h along sin²θ_h + cos²θ_h = 1. */
+typedef struct cf_ggx_d {
+  double value, d_a2, d_sin2;
+} cf_ggx_d;
+
+static inline cf_ggx_d ggx_d(double a2, double inv_a2, double sin2_h,
+                             double cos2_h) {
+  cf_ggx_d d;
+  double q = sin2_h + a2 * cos2_h; /* >= α² cos²θ_h > 0 when lit */
+  double inv_q = 1.0 / q;
+  d.value = a2 * CF_INV_PI * inv_q * inv_q;
+  d.d_a2 = d.value * (sin2_h - a2 * cos2_h) * inv_q * inv_a2;
+  d.d_sin2 = -2.0 * d.value * (1.0 - a2) * inv_q;
+  return d;
+}
+
+/* ---- Height-correlated Smith GGX visibility V = G2 / (4 c_i c_o)
+ * (Heitz 2014 eq. 99; the form of Filament, glTF, MaterialX):
+ *   V = 0.5 / (c_o Λ_i + c_i Λ_o),  Λ = sqrt(α² + c² (1 − α²)).
+ * Written directly, never as G/(4 c_i c_o) (0/0 at the smallest cosines). */
+typedef struct cf_smith_v {
+  double value, d_a2, d_ci, d_co;
+} cf_smith_v;
+
+static inline cf_smith_v smith_ggx_v(double a2, double c_i, double c_o) {
+  cf_smith_v s;
+  double lambda_i = sqrt(a2 + c_i * c_i * (1.0 - a2));
+  double lambda_o = sqrt(a2 + c_o * c_o * (1.0 - a2));
+  double inv_den = 1.0 / (c_o * lambda_i + c_i * lambda_o);
+  s.value = 0.5 * inv_den;
+  double v2 = 2.0 * s.value * s.value; /* −∂V/∂den = 0.5/den² */
+  double inv_lambda_i = 1.0 / lambda_i, inv_lambda_o = 1.0 / lambda_o;
+  s.d_a2 = -0.5 * v2 *
+           (c_o * (1.0 - c_i * c_i) * inv_lambda_i +
+            c_i * (1.0 - c_o * c_o) * inv_lambda_o);
+  s.d_ci = -v2 * (lambda_o + c_o * c_i * (1.0 - a2) * inv_lambda_i);
+  s.d_co = -v2 * (lambda_i + c_i * c_o * (1.0 - a2) * inv_lambda_o);
+  return s;
+}
+
+/* ---- Burley's separable Smith GGX (smithG_GGX product, Burley 2012):
+ *   Vs = 1 / ((c_i + sqrt(α_g² + c_i² − α_g² c_i²)) (c_o + sqrt(...c_o...))) */
+static inline double smith_ggx_separable(double ag2, double c_i, double c_o) {
+  double gi = c_i + sqrt(ag2 + c_i * c_i - ag2 * c_i * c_i);
+  double go = c_o + sqrt(ag2 + c_o * c_o - ag2 * c_o * c_o);
+  return 1.0 / (gi * go);
+}
+
+/* ---- Burley's GTR1 (Berry) lobe of the clear coat (Burley 2012, B.2):
+ *   D1(a, c_h) = (a² − 1) / (π ln(a²) (1 + (a² − 1) c_h²))
+ *             = (a² − 1) / (π ln(a²) (sin²θ_h + a² cos²θ_h)).
+ * log_a2 = ln(a²) (a property of the parameters, computed once).
+ * d_a2: ∂D1/∂(a²). Requires 0 < a² < 1 (the coat's a is in [0.001, 0.1]). */
+typedef struct cf_gtr1 {
+  double value, d_a2;
+} cf_gtr1;
+
+static inline cf_gtr1 gtr1_d(double a2, double log_a2, double sin2_h,
+                             double cos2_h) {
+  cf_gtr1 d;
+  double q = sin2_h + a2 * cos2_h;
+  d.value = (a2 - 1.0) / (CF_PI * log_a2 * q);
+  d.d_a2 = d.value * (1.0 / (a2 - 1.0) - 1.0 / (a2 * log_a2) - cos2_h / q);
+  return d;
+}
+
+/* ---- Oren-Nayar qualitative model (Oren & Nayar 1994 eq. 30; the seed's
+ * eq. 17), without trigonometry (MODEL.md):
+ *   ON = ρ/π (A + B · max(0, l·v − c_i c_o) / max(c_i, c_o)),
+ *   A = 1 − 0.5 σ²/(σ² + 0.33),  B = 0.45 σ²/(σ² + 0.09).
+ * The coefficients depend on σ only; the angular factor on geometry only. */
+typedef struct cf_oren_nayar_coeffs {
+  double a, b, d_a, d_b; /* A, B and their derivatives in σ */
+} cf_oren_nayar_coeffs;
+
+static inline cf_oren_nayar_coeffs oren_nayar_coeffs(double sigma) {
+  cf_oren_nayar_coeffs k;
+  double s2 = sigma * sigma;
+  double da = s2 + 0.33, db = s2 + 0.09;
+  k.a = 1.0 - 0.5 * s2 / da;
+  k.b = 0.45 * s2 / db;
+  k.d_a = -0.5 * 0.33 * 2.0 * sigma / (da * da);
+  k.d_b = 0.45 * 0.09 * 2.0 * sigma / (db * db);
+  return k;
+}
+
+/* max(0, g) / max(c_i, c_o), with g = l·v − c_i c_o (= sin α tan β
+ * max(0, cos(φ_i − φ_o)) for unit vectors). */
+static inline double oren_nayar_angular(double g, double c_i, double c_o) {
+  if (g <= 0.0) return 0.0;
+  return g / (c_i > c_o ? c_i : c_o);
+}
+
+#endif /* CLAYFIT_MODEL_TERMS_H */

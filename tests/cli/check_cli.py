@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Run one clayfit command and check what it did.
+
+usage: check_cli.py [--exit N] [--stderr REGEX] [--schema FILE]
+                    [--expect PYTHON_EXPRESSION] -- COMMAND ARGS...
+
+--exit     the exit status the command must return (default 0)
+--stderr   a regular expression stderr must contain
+--schema   stdout must be JSON valid against this JSON Schema (2020-12)
+--expect   a Python expression over `doc` (stdout's JSON) that must be true
+"""
+import argparse
+import json
+import math  # noqa: F401  (for --expect expressions)
+import re
+import subprocess
+import sys
+
+import jsonschema
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--exit", type=int, default=0)
+    parser.add_argument("--stderr")
+    parser.add_argument("--schema")
+    parser.add_argument("--expect", action="append", default=[])
+    parser.add_argument("command", nargs=argparse.REMAINDER)
+    args = parser.parse_args()
+    command = args.command[1:] if args.command[:1] == ["--"] else args.command
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    failures = []
+    if result.returncode != args.exit:
+        failures.append(f"exit status {result.returncode}, expected {args.exit}")
+    if args.stderr and not re.search(args.stderr, result.stderr):
+        failures.append(f"stderr does not match /{args.stderr}/")
+    if result.returncode < 0 or "Sanitizer" in result.stderr:
+        failures.append("the command crashed or a sanitizer reported an error")
+    doc = None
+    if args.schema or args.expect:
+        try:
+            doc = json.loads(result.stdout)
+        except json.JSONDecodeError as error:
+            failures.append(f"stdout is not JSON: {error}")
+    if doc is not None and args.schema:
+        with open(args.schema, encoding="utf-8") as f:
+            schema = json.load(f)
+        validator = jsonschema.Draft202012Validator(schema)
+        for error in validator.iter_errors(doc):
+            failures.append(f"schema: {'/'.join(map(str, error.path))}: {error.message}")
+    if doc is not None:
+        for expression in args.expect:
+            if not eval(expression, {"doc": doc, "math": math}):  # noqa: S307
+                failures.append(f"expectation failed: {expression}")
+    print("$", " ".join(command))
+    print("exit", result.returncode)
+    if result.stderr:
+        print("stderr:", result.stderr.strip()[:2000])
+    for failure in failures:
+        print("FAIL:", failure)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
