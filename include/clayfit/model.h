@@ -202,9 +202,11 @@ cf_status cf_params_check(cf_model_id model, const double *params,
                           cf_error *err);
 
 /* ---------------------------------------------------------------------
- * Geometry: the four scalars the BRDF depends on, computed once from
- * (n, l, v). With l_t = l − c_i n and v_t = v − c_o n (the parts of l and
- * v tangent to the surface):
+ * Geometry: everything the BRDF needs of (n, l, v), computed once per
+ * observation by cf_geometry_from_directions (do not fill it by hand).
+ *
+ * The four invariants: with l_t = l − c_i n and v_t = v − c_o n (the parts
+ * of l and v tangent to the surface),
  *   cos_i = n·l, cos_o = n·v,
  *   t_sq  = |l_t + v_t|²  (so |l + v|² = t_sq + (cos_i + cos_o)²),
  *   g     = l_t·v_t = l·v − c_i c_o.
@@ -212,9 +214,20 @@ cf_status cf_params_check(cf_model_id model, const double *params,
  * tangent parts keeps the half vector's sin²θ_h accurate at a mirror
  * configuration, and every expression is symmetric in l and v, so f is
  * reciprocal to the last bit.
+ *
+ * The rest are functions of the invariants that do not depend on any
+ * parameter, so that a fit (which evaluates the same observations at
+ * every iteration) computes them once. They are 0 where the pair is not
+ * lit (cf_geometry_is_lit).
  * ------------------------------------------------------------------- */
 typedef struct cf_geometry {
   double cos_i, cos_o, t_sq, g;
+  double sin2_h, cos2_h; /* of the half vector h = (l + v)/|l + v| */
+  double c_d;            /* |l + v|/2 = v·h = l·h */
+  double weight_d;       /* Schlick's (1 − c_d)^5 */
+  double transmission;   /* (1 − (1 − c_i)^5)(1 − (1 − c_o)^5) */
+  double on_angular;     /* Oren-Nayar's max(0, g)/max(c_i, c_o) */
+  double coat_visibility;/* Burley's separable Smith GGX, α_g = 0.25 (M3) */
 } cf_geometry;
 
 /* Is the pair lit and seen (f can be non-zero)? c_i > 0, c_o > 0 and

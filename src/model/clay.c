@@ -85,15 +85,14 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
-  cf_half_vector h = half_vector(g->t_sq, c_i + c_o);
-  double weight_d = schlick_weight(h.c_d);
+  double weight_d = g->weight_d;
   double fresnel_1 = fresnel_schlick(p->f0_1, weight_d);
-  cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, h.sin2_h, h.cos2_h);
+  cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h);
   cf_smith_v v1 = smith_ggx_v(p->a2_1, c_i, c_o);
   double top = fresnel_1 * d1.value * v1.value;
 
   /* step 4: T(c_i) T(c_o), T(c) = (1 − F0_1)(1 − (1 − c)^5) */
-  double w = (1.0 - schlick_weight(c_i)) * (1.0 - schlick_weight(c_o));
+  double w = g->transmission;
   double one_minus_f0_1 = 1.0 - p->f0_1;
   double transmission = one_minus_f0_1 * one_minus_f0_1 * w;
 
@@ -206,27 +205,14 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
 
 static void clay_value(const cf_prepared *prep, const cf_geometry *g,
                        double f[3]) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, NULL, DIM);
-    return;
-  }
   clay_eval(&prep->clay, g, f, NULL, NULL);
 }
 
 static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g,
                             double f[3], double *grad) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, grad, DIM);
-    return;
-  }
-  /* clay_eval writes every entry but the other channels' albedo and
-   * optical depth */
-  for (int c = 0; c < 3; ++c) {
-    for (int k = 1; k < 3; ++k) {
-      grad[c * DIM + CF_CLAY_ALBEDO + (c + k) % 3] = 0.0;
-      grad[c * DIM + CF_CLAY_OPTICAL_DEPTH + (c + k) % 3] = 0.0;
-    }
-  }
+  /* clay_eval writes every entry but the other channels' RGB ones */
+  cf_zero_other_channels(grad, DIM, CF_CLAY_ALBEDO);
+  cf_zero_other_channels(grad, DIM, CF_CLAY_OPTICAL_DEPTH);
   clay_eval(&prep->clay, g, f, grad, NULL);
 }
 

@@ -6,10 +6,10 @@
 
 enum { DIM = CF_CLEARCOAT_DIM };
 
-/* Burley's fixed constants: the coat's F0 (IOR 1.5), its visibility width
- * α_g = 0.25 and the 0.25 weight of the disney_brdf reference shader. */
+/* Burley's fixed constants: the coat's F0 (IOR 1.5) and the 0.25 weight of
+ * the disney_brdf reference shader; its visibility (α_g = 0.25) depends on
+ * the geometry only and is in cf_geometry. */
 static const double coat_f0 = 0.04;
-static const double coat_visibility_a2 = 0.25 * 0.25;
 static const double coat_scale = 0.25;
 
 static void clearcoat_prepare(const double *params, cf_prepared *prep) {
@@ -26,11 +26,10 @@ static void clearcoat_prepare(const double *params, cf_prepared *prep) {
 CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p,
                                   const cf_geometry *g, double f[3],
                                   double *grad) {
-  cf_half_vector h = half_vector(g->t_sq, g->cos_i + g->cos_o);
-  cf_dielectric_eval(&p->dielectric, g, &h, f, grad, DIM);
-  double fresnel = fresnel_schlick(coat_f0, schlick_weight(h.c_d));
-  cf_gtr1 d1 = gtr1_d(p->a2, p->log_a2, h.sin2_h, h.cos2_h);
-  double vis = smith_ggx_separable(coat_visibility_a2, g->cos_i, g->cos_o);
+  cf_dielectric_eval(&p->dielectric, g, f, grad, DIM);
+  double fresnel = fresnel_schlick(coat_f0, g->weight_d);
+  cf_gtr1 d1 = gtr1_d(p->a2, p->log_a2, g->sin2_h, g->cos2_h);
+  double vis = g->coat_visibility;
   double unit_coat = coat_scale * fresnel * d1.value * vis; /* w_c = 1 */
   double coat = p->weight * unit_coat;
   for (int c = 0; c < 3; ++c) f[c] += coat;
@@ -45,17 +44,11 @@ CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p,
 
 static void clearcoat_value(const cf_prepared *prep, const cf_geometry *g,
                             double f[3]) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, NULL, DIM);
-    return;
-  }
   clearcoat_eval(&prep->clearcoat, g, f, NULL);
 }
 
 static void clearcoat_value_grad(const cf_prepared *prep, const cf_geometry *g,
                                  double f[3], double *grad) {
-  cf_zero_output(f, grad, DIM);
-  if (!cf_geometry_is_lit(g)) return;
   clearcoat_eval(&prep->clearcoat, g, f, grad);
 }
 

@@ -22,12 +22,10 @@ _Static_assert((int)CF_DIELECTRIC_F0 == (int)CF_CLEARCOAT_F0 &&
                "M3 extends M2's parameter vector");
 
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
-                        const cf_half_vector *h, double f[3], double *grad,
-                        int dim) {
+                        double f[3], double *grad, int dim) {
   /* specular lobe */
-  double weight_d = schlick_weight(h->c_d);
-  double fresnel = fresnel_schlick(p->f0, weight_d);
-  cf_ggx_d d = ggx_d(p->a2, p->inv_a2, h->sin2_h, h->cos2_h);
+  double fresnel = fresnel_schlick(p->f0, g->weight_d);
+  cf_ggx_d d = ggx_d(p->a2, p->inv_a2, g->sin2_h, g->cos2_h);
   cf_smith_v vis = smith_ggx_v(p->a2, g->cos_i, g->cos_o);
   double dv = d.value * vis.value;
   double specular = fresnel * dv;
@@ -35,17 +33,17 @@ void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
   /* diffuse lobe under the interface; each transmission is
    * 1 − F(F0, c) = (1 − F0)(1 − (1 − c)^5) */
   double one_minus_f0 = 1.0 - p->f0;
-  double w = (1.0 - schlick_weight(g->cos_i)) * (1.0 - schlick_weight(g->cos_o));
-  double transmission = one_minus_f0 * one_minus_f0 * w;
-  double x = oren_nayar_angular(g->g, g->cos_i, g->cos_o);
+  double transmission = one_minus_f0 * one_minus_f0 * g->transmission;
+  double x = g->on_angular;
   double q = p->diffuse.on.a + p->diffuse.on.b * x;
   for (int c = 0; c < 3; ++c)
     f[c] = specular + transmission * p->diffuse.rho_over_pi[c] * q;
   if (!grad) return;
 
+  cf_zero_other_channels(grad, dim, CF_DIELECTRIC_ALBEDO);
   double ds_dr = fresnel * (d.d_a2 * vis.value + d.value * vis.d_a2) * p->da2_dr;
-  double ds_df0 = (1.0 - weight_d) * dv;
-  double dt_df0 = -2.0 * one_minus_f0 * w;
+  double ds_df0 = (1.0 - g->weight_d) * dv;
+  double dt_df0 = -2.0 * one_minus_f0 * g->transmission;
   double dq_dsigma = p->diffuse.on.d_a + p->diffuse.on.d_b * x;
   for (int c = 0; c < 3; ++c) {
     double *row = grad + c * dim;
@@ -63,21 +61,13 @@ static void dielectric_prepare(const double *params, cf_prepared *prep) {
 
 static void dielectric_value(const cf_prepared *prep, const cf_geometry *g,
                              double f[3]) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, NULL, CF_DIELECTRIC_DIM);
-    return;
-  }
-  cf_half_vector h = half_vector(g->t_sq, g->cos_i + g->cos_o);
-  cf_dielectric_eval(&prep->dielectric, g, &h, f, NULL, CF_DIELECTRIC_DIM);
+  cf_dielectric_eval(&prep->dielectric, g, f, NULL, CF_DIELECTRIC_DIM);
 }
 
 static void dielectric_value_grad(const cf_prepared *prep,
                                   const cf_geometry *g, double f[3],
                                   double *grad) {
-  cf_zero_output(f, grad, CF_DIELECTRIC_DIM);
-  if (!cf_geometry_is_lit(g)) return;
-  cf_half_vector h = half_vector(g->t_sq, g->cos_i + g->cos_o);
-  cf_dielectric_eval(&prep->dielectric, g, &h, f, grad, CF_DIELECTRIC_DIM);
+  cf_dielectric_eval(&prep->dielectric, g, f, grad, CF_DIELECTRIC_DIM);
 }
 
 const cf_model_impl cf_dielectric_impl = {dielectric_prepare, dielectric_value,

@@ -1,5 +1,7 @@
 /* The evaluator's entry points: one observation, or a batch with one
  * parameter vector (the fitter's hot path). */
+#include <string.h>
+
 #include "models.h"
 
 static const cf_model_impl *const impls[CF_MODEL_COUNT] = {
@@ -22,19 +24,30 @@ cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
   return cf_eval_batch(model, params, 1, &g, f, grad);
 }
 
+/* One observation: the models are called for lit pairs only; elsewhere
+ * f = 0 and its gradient is 0 (model.h, "Conventions"). */
+static inline void eval_one(const cf_model_impl *impl, const cf_prepared *prep,
+                            const cf_geometry *g, size_t row, double *f,
+                            double *grad) {
+  if (!cf_geometry_is_lit(g)) {
+    f[0] = f[1] = f[2] = 0.0;
+    if (grad) memset(grad, 0, row * sizeof *grad);
+  } else if (grad) {
+    impl->value_grad(prep, g, f, grad);
+  } else {
+    impl->value(prep, g, f);
+  }
+}
+
 cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
                         const cf_geometry *geometry, double *f, double *grad) {
   const cf_model_impl *impl = impl_of(model);
   if (!impl) return CF_EINVAL;
   cf_prepared prep;
   impl->prepare(params, &prep);
-  if (!grad) {
-    for (size_t i = 0; i < count; ++i) impl->value(&prep, &geometry[i], f + 3 * i);
-    return CF_OK;
-  }
   const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
   for (size_t i = 0; i < count; ++i)
-    impl->value_grad(&prep, &geometry[i], f + 3 * i, grad + row * i);
+    eval_one(impl, &prep, &geometry[i], row, f + 3 * i, grad ? grad + row * i : NULL);
   return CF_OK;
 }
 
@@ -49,10 +62,7 @@ cf_status cf_eval_batch_directions(cf_model_id model, const double *params,
   const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
   for (size_t i = 0; i < count; ++i) {
     cf_geometry g = cf_geometry_from_directions(n + 3 * i, l + 3 * i, v + 3 * i);
-    if (grad)
-      impl->value_grad(&prep, &g, f + 3 * i, grad + row * i);
-    else
-      impl->value(&prep, &g, f + 3 * i);
+    eval_one(impl, &prep, &g, row, f + 3 * i, grad ? grad + row * i : NULL);
   }
   return CF_OK;
 }

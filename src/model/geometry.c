@@ -1,6 +1,6 @@
-/* The four invariants of (n, l, v) that every model is written in
+/* Everything the BRDF needs of (n, l, v), once per observation
  * (include/clayfit/model.h, cf_geometry). */
-#include "clayfit/model.h"
+#include "terms.h"
 
 static inline double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -8,7 +8,7 @@ static inline double dot3(const double a[3], const double b[3]) {
 
 cf_geometry cf_geometry_from_directions(const double n[3], const double l[3],
                                         const double v[3]) {
-  cf_geometry g;
+  cf_geometry g = {0};
   g.cos_i = dot3(n, l);
   g.cos_o = dot3(n, v);
   double lt[3], vt[3], t[3];
@@ -19,5 +19,15 @@ cf_geometry cf_geometry_from_directions(const double n[3], const double l[3],
   }
   g.t_sq = dot3(t, t);
   g.g = dot3(lt, vt);
+  if (!cf_geometry_is_lit(&g)) return g;
+
+  cf_half_vector h = half_vector(g.t_sq, g.cos_i + g.cos_o);
+  g.sin2_h = h.sin2_h;
+  g.cos2_h = h.cos2_h;
+  g.c_d = h.c_d;
+  g.weight_d = schlick_weight(h.c_d);
+  g.transmission = (1.0 - schlick_weight(g.cos_i)) * (1.0 - schlick_weight(g.cos_o));
+  g.on_angular = oren_nayar_angular(g.g, g.cos_i, g.cos_o);
+  g.coat_visibility = smith_ggx_separable(CF_COAT_VISIBILITY_A2, g.cos_i, g.cos_o);
   return g;
 }

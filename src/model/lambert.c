@@ -1,6 +1,8 @@
 /* M0 lambert: f = ρ/π (MODEL.md, "The model ladder"). */
 #include "models.h"
 
+enum { DIM = CF_LAMBERT_DIM };
+
 static void lambert_prepare(const double *params, cf_prepared *prep) {
   for (int c = 0; c < 3; ++c)
     prep->diffuse.rho_over_pi[c] = params[CF_LAMBERT_ALBEDO + c] * CF_INV_PI;
@@ -8,21 +10,15 @@ static void lambert_prepare(const double *params, cf_prepared *prep) {
 
 static void lambert_value(const cf_prepared *prep, const cf_geometry *g,
                           double f[3]) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, NULL, CF_LAMBERT_DIM);
-    return;
-  }
+  (void)g;
   for (int c = 0; c < 3; ++c) f[c] = prep->diffuse.rho_over_pi[c];
 }
 
 static void lambert_value_grad(const cf_prepared *prep, const cf_geometry *g,
                                double f[3], double *grad) {
-  cf_zero_output(f, grad, CF_LAMBERT_DIM);
-  if (!cf_geometry_is_lit(g)) return;
-  for (int c = 0; c < 3; ++c) {
-    f[c] = prep->diffuse.rho_over_pi[c];
-    grad[c * CF_LAMBERT_DIM + CF_LAMBERT_ALBEDO + c] = CF_INV_PI;
-  }
+  lambert_value(prep, g, f);
+  cf_zero_other_channels(grad, DIM, CF_LAMBERT_ALBEDO);
+  for (int c = 0; c < 3; ++c) grad[c * DIM + CF_LAMBERT_ALBEDO + c] = CF_INV_PI;
 }
 
 const cf_model_impl cf_lambert_impl = {lambert_prepare, lambert_value,

@@ -46,10 +46,12 @@ typedef union cf_prepared {
   cf_clay_prep clay;
 } cf_prepared;
 
+/* value and value_grad are called for lit observations only (eval.c
+ * answers the others); value_grad writes every entry of its 3 × dim
+ * channel-major gradient (model.h). */
 typedef struct cf_model_impl {
   void (*prepare)(const double *params, cf_prepared *prep);
   void (*value)(const cf_prepared *prep, const cf_geometry *g, double f[3]);
-  /* grad: 3 × dim, channel-major (model.h) */
   void (*value_grad)(const cf_prepared *prep, const cf_geometry *g,
                      double f[3], double *grad);
 } cf_model_impl;
@@ -65,10 +67,9 @@ void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p);
 void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 
 /* M2 with its gradient written into rows of length `dim` (M3 reuses it
- * with dim 8); grad may be NULL. The observation must be lit. */
+ * with dim 8, and writes its own two entries); grad may be NULL. */
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
-                        const cf_half_vector *h, double f[3], double *grad,
-                        int dim);
+                        double f[3], double *grad, int dim);
 
 /* M4 taken apart (MODEL.md step 8), for tests and reports:
  *   f_c = top + transmission · absorption_c · inv_eta2 · base_c. */

@@ -15,10 +15,11 @@ CF_ALWAYS_INLINE void oren_nayar_eval(const cf_diffuse_prep *p,
                                    const cf_geometry *g, double f[3],
                                    double *grad) {
   enum { DIM = CF_OREN_NAYAR_DIM };
-  double x = oren_nayar_angular(g->g, g->cos_i, g->cos_o);
+  double x = g->on_angular;
   double q = p->on.a + p->on.b * x;
   for (int c = 0; c < 3; ++c) f[c] = p->rho_over_pi[c] * q;
   if (!grad) return;
+  cf_zero_other_channels(grad, DIM, CF_OREN_NAYAR_ALBEDO);
   double dq_dsigma = p->on.d_a + p->on.d_b * x;
   for (int c = 0; c < 3; ++c) {
     double *row = grad + c * DIM;
@@ -29,18 +30,12 @@ CF_ALWAYS_INLINE void oren_nayar_eval(const cf_diffuse_prep *p,
 
 static void oren_nayar_value(const cf_prepared *prep, const cf_geometry *g,
                              double f[3]) {
-  if (!cf_geometry_is_lit(g)) {
-    cf_zero_output(f, NULL, CF_OREN_NAYAR_DIM);
-    return;
-  }
   oren_nayar_eval(&prep->diffuse, g, f, NULL);
 }
 
 static void oren_nayar_value_grad(const cf_prepared *prep,
                                   const cf_geometry *g, double f[3],
                                   double *grad) {
-  cf_zero_output(f, grad, CF_OREN_NAYAR_DIM);
-  if (!cf_geometry_is_lit(g)) return;
   oren_nayar_eval(&prep->diffuse, g, f, grad);
 }
 

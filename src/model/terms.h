@@ -21,11 +21,11 @@
 #define CF_ALWAYS_INLINE static inline
 #endif
 
-/* Zero a value triple and, if requested, its 3 × dim gradient. */
-static inline void cf_zero_output(double f[3], double *grad, int dim) {
-  f[0] = f[1] = f[2] = 0.0;
-  if (grad)
-    for (int k = 0; k < 3 * dim; ++k) grad[k] = 0.0;
+/* In a 3 × dim gradient, zero the entries of the RGB parameter at `slot`
+ * that belong to the other channels (∂f_c/∂p_k = 0 for k != c). */
+static inline void cf_zero_other_channels(double *grad, int dim, int slot) {
+  for (int c = 0; c < 3; ++c)
+    for (int k = 1; k < 3; ++k) grad[c * dim + slot + (c + k) % 3] = 0.0;
 }
 
 /* ---- Schlick's Fresnel: F(F0, c) = F0 + (1 − F0)(1 − c)^5, c in [0, 1]
@@ -115,6 +115,9 @@ static inline cf_smith_v smith_ggx_v(double a2, double c_i, double c_o) {
   s.d_co = -v2 * (lambda_i + c_i * c_o * (1.0 - a2) * inv_lambda_o);
   return s;
 }
+
+/* Burley's clear coat uses this visibility with a fixed α_g = 0.25. */
+#define CF_COAT_VISIBILITY_A2 (0.25 * 0.25)
 
 /* ---- Burley's separable Smith GGX (smithG_GGX product, Burley 2012):
  *   Vs = 1 / ((c_i + sqrt(α_g² + c_i² − α_g² c_i²)) (c_o + sqrt(...c_o...))) */
