@@ -27,8 +27,9 @@ int main(void) {
     static double f_dirs[3 * COUNT], g_dirs[3 * CF_MAX_DIM * COUNT], f_value[3 * COUNT];
     CHECK(cf_eval_batch(model, params, COUNT, geometry, f_batch, g_batch) == CF_OK, "batch");
     CHECK(cf_eval_batch(model, params, COUNT, geometry, f_value, NULL) == CF_OK, "value");
-    CHECK(cf_eval_batch_directions(model, params, COUNT, &n[0][0], &l[0][0], &v[0][0],
-                                   f_dirs, g_dirs) == CF_OK, "directions");
+    CHECK(cf_eval_batch_directions(model, params, COUNT, &n[0][0], &l[0][0], &v[0][0], f_dirs,
+                                   g_dirs) == CF_OK,
+          "directions");
     for (int i = 0; i < COUNT; ++i) {
       double f[3], g[3 * CF_MAX_DIM];
       cf_eval(model, params, n[i], l[i], v[i], f, g);

@@ -34,15 +34,27 @@ typedef struct vec3 {
   double x, y, z;
 } vec3;
 
-static vec3 v3(double x, double y, double z) { return (vec3){x, y, z}; }
-static double dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static vec3 scale(vec3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
-static vec3 add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-static vec3 normalize(vec3 a) { return scale(a, 1.0 / sqrt(dot(a, a))); }
+static vec3 v3(double x, double y, double z) {
+  return (vec3){x, y, z};
+}
+static double dot(vec3 a, vec3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static vec3 scale(vec3 a, double s) {
+  return v3(a.x * s, a.y * s, a.z * s);
+}
+static vec3 add(vec3 a, vec3 b) {
+  return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static vec3 normalize(vec3 a) {
+  return scale(a, 1.0 / sqrt(dot(a, a)));
+}
 static vec3 cross(vec3 a, vec3 b) {
   return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-static vec3 reflect(vec3 v, vec3 h) { return add(scale(h, 2.0 * dot(v, h)), scale(v, -1.0)); }
+static vec3 reflect(vec3 v, vec3 h) {
+  return add(scale(h, 2.0 * dot(v, h)), scale(v, -1.0));
+}
 
 /* ---- the lobes' densities (z-up frame, n = (0, 0, 1)) ---- */
 
@@ -66,8 +78,8 @@ static vec3 ggx_sample_visible_normal(double alpha, vec3 v, double u1, double u2
   double p1 = r * cos(phi), p2 = r * sin(phi);
   double s = 0.5 * (1.0 + vh.z);
   p2 = (1.0 - s) * sqrt(1.0 - p1 * p1) + s * p2;
-  vec3 nh = add(add(scale(t1, p1), scale(t2, p2)),
-                scale(vh, sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2))));
+  vec3 nh =
+      add(add(scale(t1, p1), scale(t2, p2)), scale(vh, sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2))));
   return normalize(v3(alpha * nh.x, alpha * nh.y, fmax(0.0, nh.z)));
 }
 
@@ -110,9 +122,12 @@ typedef struct setup {
 static double strategy_pdf(const setup *s, const strategy *k, vec3 v, vec3 l) {
   if (l.z <= 0.0) return 0.0;
   switch (k->kind) {
-    case COSINE: return l.z / M_PI;
-    case UNIFORM: return 0.5 / M_PI;
-    case GGX_AIR: return ggx_reflection_pdf(k->a2, v, l);
+    case COSINE:
+      return l.z / M_PI;
+    case UNIFORM:
+      return 0.5 / M_PI;
+    case GGX_AIR:
+      return ggx_reflection_pdf(k->a2, v, l);
     case GGX_FILM: {
       vec3 vf = refract_in(v, s->eta), lf = refract_in(l, s->eta);
       return ggx_reflection_pdf(k->a2, vf, lf) * l.z / (s->eta * s->eta * lf.z);
@@ -127,8 +142,8 @@ static double strategy_pdf(const setup *s, const strategy *k, vec3 v, vec3 l) {
 
 /* Map (u1, u2) in [0, 1)² to l by strategy k; returns 0 when the draw
  * gives no valid direction. */
-static int strategy_sample(const setup *s, const strategy *k, vec3 v, double u1,
-                           double u2, vec3 *l) {
+static int strategy_sample(const setup *s, const strategy *k, vec3 v, double u1, double u2,
+                           vec3 *l) {
   switch (k->kind) {
     case COSINE: {
       double r = sqrt(u1), phi = 2.0 * M_PI * u2;
@@ -190,7 +205,8 @@ static void setup_strategies(setup *s) {
       s->eta = (1.0 + sq) / (1.0 - sq);
       break;
     }
-    default: break;
+    default:
+      break;
   }
 }
 
@@ -205,8 +221,7 @@ typedef struct estimate {
  * replicates, which stays honest under stratification. */
 enum { GRID = 32, REPLICATES = 16, MAX_REPLICATES = 256 };
 
-static estimate directional_albedo(const setup *s, double c_o, int replicates,
-                                   cf_rng *rng) {
+static estimate directional_albedo(const setup *s, double c_o, int replicates, cf_rng *rng) {
   const double n[3] = {0.0, 0.0, 1.0};
   vec3 v = v3(sqrt((1.0 - c_o) * (1.0 + c_o)), 0.0, c_o);
   const double weight = 1.0 / s->count;
@@ -304,14 +319,15 @@ static void check_params(cf_model_id model, const double *params, cf_rng *rng,
               "%s c_o %g: albedo %.5f near the bound with standard error %.2g", code,
               view_cosines[j], e.albedo[c], e.standard_error[c]);
       if (model != CF_MODEL_CLEARCOAT)
-        CHECK(e.albedo[c] <= bound, "%s c_o %g channel %d: albedo %.6f (+- %.1e) > %g",
-              code, view_cosines[j], c, e.albedo[c], e.standard_error[c], bound);
+        CHECK(e.albedo[c] <= bound, "%s c_o %g channel %d: albedo %.6f (+- %.1e) > %g", code,
+              view_cosines[j], c, e.albedo[c], e.standard_error[c], bound);
     }
     for (int k = 0; k < s.count; ++k) {
       summary->worst_pdf_z = fmax(summary->worst_pdf_z, e.pdf_z[k]);
-      CHECK(e.pdf_z[k] < 8.0, "%s c_o %g strategy %d: the integral of its pdf differs "
-            "from the fraction of its valid samples by %.1f standard errors", code,
-            view_cosines[j], k, e.pdf_z[k]);
+      CHECK(e.pdf_z[k] < 8.0,
+            "%s c_o %g strategy %d: the integral of its pdf differs "
+            "from the fraction of its valid samples by %.1f standard errors",
+            code, view_cosines[j], k, e.pdf_z[k]);
     }
   }
 }
@@ -327,8 +343,10 @@ static void corner_params(cf_model_id model, unsigned mask, double *p) {
 }
 
 int main(void) {
-  printf("directional albedo with rho = 1 by MIS: %d replicates x %d jittered samples "
-         "per strategy, views c_o = 1 .. 0.01\n", REPLICATES, GRID * GRID);
+  printf(
+      "directional albedo with rho = 1 by MIS: %d replicates x %d jittered samples "
+      "per strategy, views c_o = 1 .. 0.01\n",
+      REPLICATES, GRID * GRID);
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     cf_model_id model = (cf_model_id)m;
     const cf_model_info *info = cf_model_info_get(model);
@@ -353,15 +371,14 @@ int main(void) {
     for (int k = 3, used = 0; k < info->dim; ++k) {
       char name[48];
       used += snprintf(params_text + used, sizeof params_text - (size_t)used, " %s=%g",
-                       cf_model_slot_name(model, k, name, sizeof name),
-                       summary.max_params[k]);
+                       cf_model_slot_name(model, k, name, sizeof name), summary.max_params[k]);
     }
-    printf("%s %-10s: %ld estimates (%ld refined), max albedo %.5f +- %.1e at c_o = %g "
-           "(%s ), largest standard error %.1e, worst pdf-integral z %.2f%s\n",
-           info->code, info->name, summary.estimates, summary.refined, summary.max_albedo,
-           summary.max_albedo_error, summary.max_view, params_text, summary.max_error,
-           summary.worst_pdf_z,
-           model == CF_MODEL_CLEARCOAT ? " (reported, not asserted)" : "");
+    printf(
+        "%s %-10s: %ld estimates (%ld refined), max albedo %.5f +- %.1e at c_o = %g "
+        "(%s ), largest standard error %.1e, worst pdf-integral z %.2f%s\n",
+        info->code, info->name, summary.estimates, summary.refined, summary.max_albedo,
+        summary.max_albedo_error, summary.max_view, params_text, summary.max_error,
+        summary.worst_pdf_z, model == CF_MODEL_CLEARCOAT ? " (reported, not asserted)" : "");
   }
   return check_finish("test_energy");
 }

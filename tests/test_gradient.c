@@ -38,8 +38,8 @@ typedef struct gradient_state {
   const char *set;
 } gradient_state;
 
-static void compare(gradient_state *s, const double *params, const double n[3],
-                    const double l[3], const double v[3]) {
+static void compare(gradient_state *s, const double *params, const double n[3], const double l[3],
+                    const double v[3]) {
   const int dim = cf_model_info_get(s->model)->dim;
   double f[3], grad[3 * CF_MAX_DIM];
   cf_eval(s->model, params, n, l, v, f, grad);
@@ -58,7 +58,8 @@ static void compare(gradient_state *s, const double *params, const double n[3],
         s->worst = (worst_case){err / tol, g, g_fd[c], f[c], k, c, s->cases};
       }
       char name[48];
-      CHECK(err <= tol, "%s %s case %ld: d f[%d] / d %s: analytic %.10g, finite "
+      CHECK(err <= tol,
+            "%s %s case %ld: d f[%d] / d %s: analytic %.10g, finite "
             "difference %.10g (f = %.6g, %s)",
             cf_model_info_get(s->model)->code, s->set, s->cases, c,
             cf_model_slot_name(s->model, k, name, sizeof name), g, g_fd[c], f[c],
@@ -68,29 +69,28 @@ static void compare(gradient_state *s, const double *params, const double n[3],
   ++s->cases;
 }
 
-static double hard_n[MAX_GEOMETRIES][3], hard_l[MAX_GEOMETRIES][3],
-    hard_v[MAX_GEOMETRIES][3];
+static double hard_n[MAX_GEOMETRIES][3], hard_l[MAX_GEOMETRIES][3], hard_v[MAX_GEOMETRIES][3];
 static size_t hard_count;
 
 static void visit_extreme(const double *params, void *user) {
-  for (size_t i = 0; i < hard_count; ++i)
-    compare(user, params, hard_n[i], hard_l[i], hard_v[i]);
+  for (size_t i = 0; i < hard_count; ++i) compare(user, params, hard_n[i], hard_l[i], hard_v[i]);
 }
 
 static void report(const gradient_state *s) {
   char name[48];
-  printf("%s %-7s: %ld cases, %ld comparisons; worst |g - g_fd| / tol = %.3g "
-         "(d f[%d] / d %s: analytic %.10g, fd %.10g, f %.4g)\n",
-         cf_model_info_get(s->model)->code, s->set, s->cases, s->comparisons,
-         s->worst.ratio, s->worst.channel,
-         cf_model_slot_name(s->model, s->worst.slot, name, sizeof name), s->worst.g,
-         s->worst.g_fd, s->worst.f);
+  printf(
+      "%s %-7s: %ld cases, %ld comparisons; worst |g - g_fd| / tol = %.3g "
+      "(d f[%d] / d %s: analytic %.10g, fd %.10g, f %.4g)\n",
+      cf_model_info_get(s->model)->code, s->set, s->cases, s->comparisons, s->worst.ratio,
+      s->worst.channel, cf_model_slot_name(s->model, s->worst.slot, name, sizeof name), s->worst.g,
+      s->worst.g_fd, s->worst.f);
 }
 
 int main(void) {
-  printf("tolerance: |g - g_fd| <= %.0e (|f| + %.0e) + eps_r max(|g|, |g_fd|, q), "
-         "eps_r = %.0e central, %.0e one-sided\n",
-         eps_abs, eps_abs_floor, eps_rel_central, eps_rel_one_sided);
+  printf(
+      "tolerance: |g - g_fd| <= %.0e (|f| + %.0e) + eps_r max(|g|, |g_fd|, q), "
+      "eps_r = %.0e central, %.0e one-sided\n",
+      eps_abs, eps_abs_floor, eps_rel_central, eps_rel_one_sided);
   hard_count = hard_geometries(hard_n, hard_l, hard_v, MAX_GEOMETRIES);
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     cf_model_id model = (cf_model_id)m;

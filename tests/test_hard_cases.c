@@ -10,8 +10,7 @@
 CHECK_MAIN_STATE;
 
 enum { MAX_GEOMETRIES = 512 };
-static double normals[MAX_GEOMETRIES][3], lights[MAX_GEOMETRIES][3],
-    views[MAX_GEOMETRIES][3];
+static double normals[MAX_GEOMETRIES][3], lights[MAX_GEOMETRIES][3], views[MAX_GEOMETRIES][3];
 static size_t geometry_count;
 
 typedef struct grid_state {
@@ -29,18 +28,17 @@ static void visit(const double *params, void *user) {
     ++s->evaluations;
     s->lit += cf_geometry_is_lit(&g);
     for (int c = 0; c < 3; ++c) {
-      CHECK(isfinite(f[c]) && f[c] >= 0.0,
-            "model %d geometry %zu (c_i %g, c_o %g): f[%d] = %g", (int)s->model, i,
-            g.cos_i, g.cos_o, c, f[c]);
+      CHECK(isfinite(f[c]) && f[c] >= 0.0, "model %d geometry %zu (c_i %g, c_o %g): f[%d] = %g",
+            (int)s->model, i, g.cos_i, g.cos_o, c, f[c]);
       if (g.cos_i <= 0.0 || g.cos_o <= 0.0)
-        CHECK(f[c] == 0.0, "model %d geometry %zu below the horizon: f = %g",
-              (int)s->model, i, f[c]);
+        CHECK(f[c] == 0.0, "model %d geometry %zu below the horizon: f = %g", (int)s->model, i,
+              f[c]);
       for (int k = 0; k < dim; ++k) {
         char name[48];
         CHECK(isfinite(grad[c * dim + k]),
-              "model %d geometry %zu (c_i %g, c_o %g): d f[%d] / d %s = %g",
-              (int)s->model, i, g.cos_i, g.cos_o, c,
-              cf_model_slot_name(s->model, k, name, sizeof name), grad[c * dim + k]);
+              "model %d geometry %zu (c_i %g, c_o %g): d f[%d] / d %s = %g", (int)s->model, i,
+              g.cos_i, g.cos_o, c, cf_model_slot_name(s->model, k, name, sizeof name),
+              grad[c * dim + k]);
       }
     }
   }
@@ -52,8 +50,7 @@ int main(void) {
     grid_state s = {(cf_model_id)m, 0, 0};
     long sets = for_each_extreme_params(s.model, visit, &s);
     printf("%s: %ld parameter sets x %zu geometries = %ld evaluations (%ld lit)\n",
-           cf_model_info_get(s.model)->code, sets, geometry_count, s.evaluations,
-           s.lit);
+           cf_model_info_get(s.model)->code, sets, geometry_count, s.evaluations, s.lit);
   }
   return check_finish("test_hard_cases");
 }

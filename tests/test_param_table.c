@@ -14,12 +14,12 @@ int main(void) {
     CHECK(info && info->id == (cf_param_id)p, "param %d", p);
     CHECK(info->lower < info->upper, "%s: empty range", info->name);
     CHECK(info->default_value >= info->lower && info->default_value <= info->upper,
-          "%s: default %g outside [%g, %g]", info->name, info->default_value,
-          info->lower, info->upper);
+          "%s: default %g outside [%g, %g]", info->name, info->default_value, info->lower,
+          info->upper);
     CHECK(info->components == 1 || info->components == 3, "%s", info->name);
     for (int q = 0; q < p; ++q)
-      CHECK(strcmp(info->name, cf_param_info_get((cf_param_id)q)->name) != 0,
-            "duplicate name %s", info->name);
+      CHECK(strcmp(info->name, cf_param_info_get((cf_param_id)q)->name) != 0, "duplicate name %s",
+            info->name);
   }
   CHECK(cf_param_info_get(CF_PARAM_COUNT) == NULL, "out-of-range id");
 
@@ -41,10 +41,10 @@ int main(void) {
     }
     CHECK(next == model->dim, "%s: slots %d != dim %d", model->code, next, model->dim);
     cf_model_id found;
-    CHECK(cf_model_find(model->code, &found, NULL) == CF_OK && found == model->id,
-          "find %s", model->code);
-    CHECK(cf_model_find(model->name, &found, NULL) == CF_OK && found == model->id,
-          "find %s", model->name);
+    CHECK(cf_model_find(model->code, &found, NULL) == CF_OK && found == model->id, "find %s",
+          model->code);
+    CHECK(cf_model_find(model->name, &found, NULL) == CF_OK && found == model->id, "find %s",
+          model->name);
     double params[CF_MAX_DIM];
     cf_model_default_params(model->id, params);
     CHECK(cf_params_check(model->id, params, NULL) == CF_OK, "%s defaults", model->code);
@@ -61,18 +61,16 @@ int main(void) {
   CHECK(cf_model_param_find(CF_MODEL_CLAY, "base_f0", &slot, &info, &err) == CF_OK &&
             slot == CF_CLAY_BASE_F0 && info->id == CF_PARAM_BASE_F0,
         "base_f0 slot %d", slot);
-  CHECK(cf_model_param_find(CF_MODEL_DIELECTRIC, "film_f0", &slot, &info, &err) ==
-            CF_ENOTFOUND,
+  CHECK(cf_model_param_find(CF_MODEL_DIELECTRIC, "film_f0", &slot, &info, &err) == CF_ENOTFOUND,
         "M2 has no film_f0");
-  CHECK(strstr(err.message, "film_f0") && strstr(err.message, "roughness"),
-        "message: %s", err.message);
+  CHECK(strstr(err.message, "film_f0") && strstr(err.message, "roughness"), "message: %s",
+        err.message);
 
   double p[CF_CLAY_DIM];
   cf_model_default_params(CF_MODEL_CLAY, p);
   p[CF_CLAY_FILM_F0] = 0.005;
   CHECK(cf_params_check(CF_MODEL_CLAY, p, &err) == CF_ERANGE, "below range");
-  CHECK(strstr(err.message, "film_f0") && strstr(err.message, "0.01"), "message: %s",
-        err.message);
+  CHECK(strstr(err.message, "film_f0") && strstr(err.message, "0.01"), "message: %s", err.message);
   cf_model_default_params(CF_MODEL_CLAY, p);
   p[CF_CLAY_OPTICAL_DEPTH + 1] = NAN;
   CHECK(cf_params_check(CF_MODEL_CLAY, p, &err) == CF_EINVAL, "NaN");

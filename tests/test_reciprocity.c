@@ -33,9 +33,10 @@ int main(void) {
               cf_model_info_get(model)->code, i, c, f_lv[c], f_vl[c]);
       }
     }
-    printf("%s: %d pairs, worst relative difference %.3g (tolerance %.0e), %ld of %d "
-           "values identical to the bit\n",
-           cf_model_info_get(model)->code, PAIRS, worst, tolerance, exact, 3 * PAIRS);
+    printf(
+        "%s: %d pairs, worst relative difference %.3g (tolerance %.0e), %ld of %d "
+        "values identical to the bit\n",
+        cf_model_info_get(model)->code, PAIRS, worst, tolerance, exact, 3 * PAIRS);
   }
   return check_finish("test_reciprocity");
 }

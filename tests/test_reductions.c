@@ -60,21 +60,26 @@ int main(void) {
     static const double large_tau[] = {400.0, 1e3};
     for (int j = 0; j < 2; ++j) {
       for (int c = 0; c < 3; ++c) clay[CF_CLAY_OPTICAL_DEPTH + c] = large_tau[j];
-      double m2[CF_DIELECTRIC_DIM] = {0.0, 0.0, 0.0, clay[CF_CLAY_DIFFUSE_ROUGHNESS],
-                                      clay[CF_CLAY_FILM_ROUGHNESS], clay[CF_CLAY_FILM_F0]};
+      double m2[CF_DIELECTRIC_DIM] = {0.0,
+                                      0.0,
+                                      0.0,
+                                      clay[CF_CLAY_DIFFUSE_ROUGHNESS],
+                                      clay[CF_CLAY_FILM_ROUGHNESS],
+                                      clay[CF_CLAY_FILM_F0]};
       double f_top[3];
       cf_eval(CF_MODEL_CLAY, clay, n, l, v, f_clay, NULL);
       cf_eval(CF_MODEL_DIELECTRIC, m2, n, l, v, f_top, NULL);
       for (int c = 0; c < 3; ++c) {
         double diff = fabs(f_clay[c] - f_top[c]);
         if (f_top[c] > 0.0) worst_top = fmax(worst_top, diff / f_top[c]);
-        CHECK(diff <= 1e-300 + 1e-14 * f_top[c],
-              "case %d: M4(tau=%g) %.17g != top specular %.17g", i, large_tau[j],
-              f_clay[c], f_top[c]);
+        CHECK(diff <= 1e-300 + 1e-14 * f_top[c], "case %d: M4(tau=%g) %.17g != top specular %.17g",
+              i, large_tau[j], f_clay[c], f_top[c]);
       }
     }
   }
-  printf("%d cases (%ld lit); M4 at large tau vs M2(rho=0): worst relative "
-         "difference %.3g\n", CASES, lit, worst_top);
+  printf(
+      "%d cases (%ld lit); M4 at large tau vs M2(rho=0): worst relative "
+      "difference %.3g\n",
+      CASES, lit, worst_top);
   return check_finish("test_reductions");
 }

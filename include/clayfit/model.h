@@ -64,6 +64,7 @@ extern "C" {
  *   capture does not constrain the parameter).
  * lower, upper: MODEL.md's ranges (the fit bounds), inclusive.
  * ------------------------------------------------------------------- */
+/* clang-format off */
 #define CF_PARAM_MAP(X)                                                        \
   X(ALBEDO, "albedo", "rho", 3, "1", 0.5, 0.0, 1.0,                            \
     "diffuse albedo of the clay body, per linear-RGB channel")                 \
@@ -90,6 +91,8 @@ extern "C" {
     "normal-incidence reflectance of the film-to-clay interface "             \
     "(clay under water about 0.004)")
 
+/* clang-format on */
+
 typedef enum cf_param_id {
 #define CF__PARAM_ENUM(ID, ...) CF_PARAM_##ID,
   CF_PARAM_MAP(CF__PARAM_ENUM)
@@ -108,6 +111,7 @@ enum {
  * The model ladder (MODEL.md, "The model ladder"): each model's parameters
  * in vector order, then X(ID, code, name, params list, summary).
  * ------------------------------------------------------------------- */
+/* clang-format off */
 #define CF_PARAMS_LAMBERT(P, M) P(M, ALBEDO)
 #define CF_PARAMS_OREN_NAYAR(P, M) P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS)
 #define CF_PARAMS_DIELECTRIC(P, M) \
@@ -131,6 +135,8 @@ enum {
   X(CLAY, "M4", "clay", CF_PARAMS_CLAY,                                      \
     "absorbing GGX film (water/oil) over a GGX + Oren-Nayar clay body")
 
+/* clang-format on */
+
 typedef enum cf_model_id {
 #define CF__MODEL_ENUM(ID, ...) CF_MODEL_##ID,
   CF_MODEL_MAP(CF__MODEL_ENUM)
@@ -142,8 +148,7 @@ typedef enum cf_model_id {
  * MODEL's vector, CF_<MODEL>_DIM the vector's length. */
 #define CF__SLOT(MODEL, ID) \
   CF_##MODEL##_##ID, CF__##MODEL##_##ID##_LAST = CF_##MODEL##_##ID + CF_NCOMP_##ID - 1,
-#define CF__SLOT_ENUM(ID, code, name, PARAMS, summary) \
-  enum { PARAMS(CF__SLOT, ID) CF_##ID##_DIM };
+#define CF__SLOT_ENUM(ID, code, name, PARAMS, summary) enum { PARAMS(CF__SLOT, ID) CF_##ID##_DIM };
 CF_MODEL_MAP(CF__SLOT_ENUM)
 #undef CF__SLOT_ENUM
 
@@ -152,10 +157,10 @@ CF_MODEL_MAP(CF__SLOT_ENUM)
 
 typedef struct cf_param_info {
   cf_param_id id;
-  const char *name;    /* "albedo" */
-  const char *symbol;  /* ASCII spelling of MODEL.md's symbol: "rho" */
-  int components;      /* 1 (scalar) or 3 (linear RGB) */
-  const char *unit;    /* "1" (dimensionless) or "rad" */
+  const char *name;   /* "albedo" */
+  const char *symbol; /* ASCII spelling of MODEL.md's symbol: "rho" */
+  int components;     /* 1 (scalar) or 3 (linear RGB) */
+  const char *unit;   /* "1" (dimensionless) or "rad" */
   double default_value;
   double lower, upper; /* inclusive range, MODEL.md's fit bounds */
   const char *meaning;
@@ -163,13 +168,13 @@ typedef struct cf_param_info {
 
 typedef struct cf_model_info {
   cf_model_id id;
-  const char *code;    /* "M4" */
-  const char *name;    /* "clay" */
+  const char *code; /* "M4" */
+  const char *name; /* "clay" */
   const char *summary;
-  int param_count;     /* number of parameters (an RGB one counts once) */
+  int param_count;           /* number of parameters (an RGB one counts once) */
   const cf_param_id *params; /* in vector order */
-  const int *offsets;  /* first vector slot of each parameter */
-  int dim;             /* length of the parameter vector */
+  const int *offsets;        /* first vector slot of each parameter */
+  int dim;                   /* length of the parameter vector */
 } cf_model_info;
 
 /* Table look-ups. Return NULL for an id outside the table. */
@@ -178,28 +183,24 @@ const cf_model_info *cf_model_info_get(cf_model_id id);
 
 /* Find a model by code or name, case-insensitive ("M4", "m4", "clay").
  * Returns CF_ENOTFOUND (with a message listing the models) if unknown. */
-cf_status cf_model_find(const char *code_or_name, cf_model_id *id,
-                        cf_error *err);
+cf_status cf_model_find(const char *code_or_name, cf_model_id *id, cf_error *err);
 
 /* Find a parameter of a model by name. CF_ENOTFOUND (with a message listing
  * the model's parameters) if the model has no such parameter. On success
  * *slot is its first vector entry and *info its description. */
-cf_status cf_model_param_find(cf_model_id model, const char *name,
-                              int *slot, const cf_param_info **info,
-                              cf_error *err);
+cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
+                              const cf_param_info **info, cf_error *err);
 
 /* Name of vector entry k of a model: "albedo[1]" style for RGB entries is
  * written into buf (at least 32 bytes); returns buf. */
-const char *cf_model_slot_name(cf_model_id model, int k, char *buf,
-                               size_t size);
+const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size);
 
 /* Fill params (model dim entries) with every parameter's default. */
 void cf_model_default_params(cf_model_id model, double *params);
 
 /* CF_OK if every entry is finite and within its range; otherwise
  * CF_ERANGE (or CF_EINVAL for NaN/Inf) with a message naming the entry. */
-cf_status cf_params_check(cf_model_id model, const double *params,
-                          cf_error *err);
+cf_status cf_params_check(cf_model_id model, const double *params, cf_error *err);
 
 /* ---------------------------------------------------------------------
  * Geometry: everything the BRDF needs of (n, l, v), computed once per
@@ -222,12 +223,12 @@ cf_status cf_params_check(cf_model_id model, const double *params,
  * ------------------------------------------------------------------- */
 typedef struct cf_geometry {
   double cos_i, cos_o, t_sq, g;
-  double sin2_h, cos2_h; /* of the half vector h = (l + v)/|l + v| */
-  double c_d;            /* |l + v|/2 = v·h = l·h */
-  double weight_d;       /* Schlick's (1 − c_d)^5 */
-  double transmission;   /* (1 − (1 − c_i)^5)(1 − (1 − c_o)^5) */
-  double on_angular;     /* Oren-Nayar's max(0, g)/max(c_i, c_o) */
-  double coat_visibility;/* Burley's separable Smith GGX, α_g = 0.25 (M3) */
+  double sin2_h, cos2_h;  /* of the half vector h = (l + v)/|l + v| */
+  double c_d;             /* |l + v|/2 = v·h = l·h */
+  double weight_d;        /* Schlick's (1 − c_d)^5 */
+  double transmission;    /* (1 − (1 − c_i)^5)(1 − (1 − c_o)^5) */
+  double on_angular;      /* Oren-Nayar's max(0, g)/max(c_i, c_o) */
+  double coat_visibility; /* Burley's separable Smith GGX, α_g = 0.25 (M3) */
 } cf_geometry;
 
 /* Is the pair lit and seen (f can be non-zero)? c_i > 0, c_o > 0 and
@@ -236,15 +237,13 @@ static inline int cf_geometry_is_lit(const cf_geometry *g) {
   return g->cos_i > 0.0 && g->cos_o > 0.0 && g->cos_i * g->cos_o >= DBL_MIN;
 }
 
-cf_geometry cf_geometry_from_directions(const double n[3], const double l[3],
-                                        const double v[3]);
+cf_geometry cf_geometry_from_directions(const double n[3], const double l[3], const double v[3]);
 
 /* Evaluate one observation. f receives 3 values (1/sr); grad, if not NULL,
  * 3 × dim derivatives as described above. CF_EINVAL for an unknown model
  * (outputs untouched); the parameters are not checked (cf_params_check). */
-cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
-                  const double l[3], const double v[3], double f[3],
-                  double *grad);
+cf_status cf_eval(cf_model_id model, const double *params, const double n[3], const double l[3],
+                  const double v[3], double f[3], double *grad);
 
 /* The fitter's hot path: `count` observations with one parameter vector.
  * Work that depends only on the parameters is done once per call.
@@ -258,10 +257,9 @@ cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
 
 /* The same from directions: n, l, v are 3 × count doubles (x, y, z of
  * observation i at [3 i .. 3 i + 2]). */
-cf_status cf_eval_batch_directions(cf_model_id model, const double *params,
-                                   size_t count, const double *n,
-                                   const double *l, const double *v,
-                                   double *f, double *grad);
+cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size_t count,
+                                   const double *n, const double *l, const double *v, double *f,
+                                   double *grad);
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,7 @@ extern "C" {
 #endif
 
 /* X(NAME, code, generic message) */
+/* clang-format off */
 #define CF_STATUS_MAP(X)                                                 \
   X(OK, 0, "success")                                                    \
   X(EINVAL, -1, "invalid argument")                                      \
@@ -24,6 +25,8 @@ extern "C" {
   X(ENOTFOUND, -6, "not found")                                          \
   X(EUNSUPPORTED, -7, "not supported")                                   \
   X(ENUMERIC, -8, "numerical failure")
+
+/* clang-format on */
 
 typedef enum cf_status {
 #define CF__STATUS_ENUM(name, code, msg) CF_##name = code,
@@ -52,8 +55,7 @@ const char *cf_status_message(cf_status status);
 /* Fill err (if not NULL) with status and a printf-style message; returns
  * status so that callers can write `return cf_error_set(err, ...);`.
  * A message longer than the buffer is truncated and ends in "...". */
-cf_status cf_error_set(cf_error *err, cf_status status, const char *format,
-                       ...)
+cf_status cf_error_set(cf_error *err, cf_status status, const char *format, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif

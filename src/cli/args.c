@@ -5,22 +5,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-cf_status cli_parse_number(const char *text, const char *what, double *out,
-                           cf_error *err) {
+cf_status cli_parse_number(const char *text, const char *what, double *out, cf_error *err) {
   char *end = NULL;
   errno = 0;
   double x = strtod(text, &end);
   if (end == text || *end != '\0')
     return cf_error_set(err, CF_EINVAL, "%s: '%s' is not a number", what, text);
   if (!isfinite(x) || errno == ERANGE)
-    return cf_error_set(err, CF_EINVAL, "%s: '%s' is not a finite number", what,
-                        text);
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' is not a finite number", what, text);
   *out = x;
   return CF_OK;
 }
 
-cf_status cli_parse_list(const char *text, const char *what, int count,
-                         double *out, cf_error *err) {
+cf_status cli_parse_list(const char *text, const char *what, int count, double *out,
+                         cf_error *err) {
   char buffer[512];
   if (strlen(text) >= sizeof buffer)
     return cf_error_set(err, CF_EINVAL, "%s: value too long", what);
@@ -31,8 +29,7 @@ cf_status cli_parse_list(const char *text, const char *what, int count,
     char *comma = strchr(cursor, ',');
     if (comma) *comma = '\0';
     if (n == count)
-      return cf_error_set(err, CF_EINVAL, "%s: '%s' has more than %d numbers",
-                          what, text, count);
+      return cf_error_set(err, CF_EINVAL, "%s: '%s' has more than %d numbers", what, text, count);
     cf_status s = cli_parse_number(cursor, what, &out[n], err);
     if (s != CF_OK) return s;
     ++n;
@@ -40,13 +37,12 @@ cf_status cli_parse_list(const char *text, const char *what, int count,
     cursor = comma + 1;
   }
   if (n != count)
-    return cf_error_set(err, CF_EINVAL, "%s: '%s' has %d number%s, expected %d",
-                        what, text, n, n == 1 ? "" : "s", count);
+    return cf_error_set(err, CF_EINVAL, "%s: '%s' has %d number%s, expected %d", what, text, n,
+                        n == 1 ? "" : "s", count);
   return CF_OK;
 }
 
-cf_status cli_parse_direction(const char *text, const char *what,
-                              double out[3], cf_error *err) {
+cf_status cli_parse_direction(const char *text, const char *what, double out[3], cf_error *err) {
   cf_status s = cli_parse_list(text, what, 3, out, err);
   if (s != CF_OK) return s;
   /* scale by the largest component first, so that no square overflows */
@@ -62,16 +58,15 @@ cf_status cli_parse_direction(const char *text, const char *what,
   return CF_OK;
 }
 
-cf_status cli_parse_count(const char *text, const char *what, long min,
-                          long max, long *out, cf_error *err) {
+cf_status cli_parse_count(const char *text, const char *what, long min, long max, long *out,
+                          cf_error *err) {
   char *end = NULL;
   errno = 0;
   long x = strtol(text, &end, 10);
   if (end == text || *end != '\0' || errno == ERANGE)
     return cf_error_set(err, CF_EINVAL, "%s: '%s' is not an integer", what, text);
   if (x < min || x > max)
-    return cf_error_set(err, CF_ERANGE, "%s: %ld is outside [%ld, %ld]", what, x,
-                        min, max);
+    return cf_error_set(err, CF_ERANGE, "%s: %ld is outside [%ld, %ld]", what, x, min, max);
   *out = x;
   return CF_OK;
 }

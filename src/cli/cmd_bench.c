@@ -14,9 +14,14 @@
 
 enum { BENCH_SEED = 20261122 };
 
-typedef enum bench_mode { MODE_VALUE, MODE_VALUE_GRAD, MODE_DIRECTIONS_GRAD, MODE_COUNT } bench_mode;
-static const char *const mode_names[MODE_COUNT] = {
-    "value", "value+grad", "value+grad from directions"};
+typedef enum bench_mode {
+  MODE_VALUE,
+  MODE_VALUE_GRAD,
+  MODE_DIRECTIONS_GRAD,
+  MODE_COUNT
+} bench_mode;
+static const char *const mode_names[MODE_COUNT] = {"value", "value+grad",
+                                                   "value+grad from directions"};
 
 static double now_seconds(void) {
   struct timespec t;
@@ -26,9 +31,9 @@ static double now_seconds(void) {
 
 typedef struct bench_data {
   size_t count;
-  double *n, *l, *v;       /* 3 × count each */
-  cf_geometry *geometry;   /* count */
-  double *f, *grad;        /* 3 × count, 3 × CF_MAX_DIM × count */
+  double *n, *l, *v;     /* 3 × count each */
+  cf_geometry *geometry; /* count */
+  double *f, *grad;      /* 3 × count, 3 × CF_MAX_DIM × count */
 } bench_data;
 
 /* Normals uniform on the sphere, l and v uniform on each normal's
@@ -53,7 +58,12 @@ static int bench_data_init(bench_data *d, size_t count) {
 }
 
 static void bench_data_free(bench_data *d) {
-  free(d->n); free(d->l); free(d->v); free(d->geometry); free(d->f); free(d->grad);
+  free(d->n);
+  free(d->l);
+  free(d->v);
+  free(d->geometry);
+  free(d->f);
+  free(d->grad);
 }
 
 static void run_pass(const bench_data *d, cf_model_id model, const double *params,
@@ -105,12 +115,11 @@ static void bench_usage(FILE *out) {
 }
 
 int cmd_bench(int argc, char **argv, cli_context *ctx) {
-  static const struct option options[] = {
-      {"count", required_argument, NULL, 'c'},
-      {"min-time", required_argument, NULL, 't'},
-      {"json", no_argument, NULL, 'j'},
-      {"help", no_argument, NULL, 'h'},
-      {0}};
+  static const struct option options[] = {{"count", required_argument, NULL, 'c'},
+                                          {"min-time", required_argument, NULL, 't'},
+                                          {"json", no_argument, NULL, 'j'},
+                                          {"help", no_argument, NULL, 'h'},
+                                          {0}};
   long count = 65536;
   double min_time = 0.5;
   int as_json = 0;
@@ -119,12 +128,23 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
   opterr = 0;
   for (int c; (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
     cf_status s = CF_OK;
-    if (c == 'c') s = cli_parse_count(optarg, "--count", 1, 100000000, &count, &err);
-    else if (c == 't') s = cli_parse_number(optarg, "--min-time", &min_time, &err);
-    else if (c == 'j') as_json = 1;
-    else if (c == 'h') { bench_usage(stdout); return CLI_EXIT_OK; }
-    else { bench_usage(stderr); return CLI_EXIT_USAGE; }
-    if (s != CF_OK) { cli_report("bench", err.message); return CLI_EXIT_USAGE; }
+    if (c == 'c')
+      s = cli_parse_count(optarg, "--count", 1, 100000000, &count, &err);
+    else if (c == 't')
+      s = cli_parse_number(optarg, "--min-time", &min_time, &err);
+    else if (c == 'j')
+      as_json = 1;
+    else if (c == 'h') {
+      bench_usage(stdout);
+      return CLI_EXIT_OK;
+    } else {
+      bench_usage(stderr);
+      return CLI_EXIT_USAGE;
+    }
+    if (s != CF_OK) {
+      cli_report("bench", err.message);
+      return CLI_EXIT_USAGE;
+    }
   }
   if (optind >= argc || strcmp(argv[optind], "eval") != 0 || optind + 1 != argc) {
     cli_report("bench", "expected 'bench eval' (the fit benchmark comes with the fitter)");
@@ -143,29 +163,27 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
   }
   json_t *rows = json_array();
   if (!as_json)
-    printf("clayfit bench eval: %ld observations, one thread, default parameters, "
-           "passes of at least %g s in all\n%-16s %-28s %14s %12s %16s\n",
-           count, min_time, "model", "mode", "median ns/eval", "best ns/eval",
-           "median evals/s");
+    printf(
+        "clayfit bench eval: %ld observations, one thread, default parameters, "
+        "passes of at least %g s in all\n%-16s %-28s %14s %12s %16s\n",
+        count, min_time, "model", "mode", "median ns/eval", "best ns/eval", "median evals/s");
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     const cf_model_info *info = cf_model_info_get((cf_model_id)m);
     double params[CF_MAX_DIM];
     cf_model_default_params(info->id, params);
     for (int mode = 0; mode < MODE_COUNT; ++mode) {
-      if (!ctx->quiet)
-        fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
+      if (!ctx->quiet) fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
       timing t = time_mode(&d, info->id, params, (bench_mode)mode, min_time);
       json_array_append_new(
-          rows, json_pack("{s:s, s:s, s:s, s:f, s:f, s:f, s:i}", "code", info->code,
-                          "model", info->name, "mode", mode_names[mode],
-                          "median_ns_per_eval", t.median_ns, "best_ns_per_eval",
-                          t.best_ns, "median_evals_per_second", 1e9 / t.median_ns,
-                          "passes", t.passes));
+          rows,
+          json_pack("{s:s, s:s, s:s, s:f, s:f, s:f, s:i}", "code", info->code, "model", info->name,
+                    "mode", mode_names[mode], "median_ns_per_eval", t.median_ns, "best_ns_per_eval",
+                    t.best_ns, "median_evals_per_second", 1e9 / t.median_ns, "passes", t.passes));
       if (!as_json) {
         char label[32];
         snprintf(label, sizeof label, "%s %s", info->code, info->name);
-        printf("%-16s %-28s %14.1f %12.1f %16.3e\n", label, mode_names[mode],
-               t.median_ns, t.best_ns, 1e9 / t.median_ns);
+        printf("%-16s %-28s %14.1f %12.1f %16.3e\n", label, mode_names[mode], t.median_ns,
+               t.best_ns, 1e9 / t.median_ns);
         fflush(stdout);
       }
     }
@@ -173,9 +191,8 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
   if (!ctx->quiet) fprintf(stderr, "\r%60s\r", "");
   bench_data_free(&d);
   if (as_json)
-    return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval",
-                                        "observations", (json_int_t)count, "threads", 1,
-                                        "results", rows))
+    return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval", "observations",
+                                        (json_int_t)count, "threads", 1, "results", rows))
                ? CLI_EXIT_FAILURE
                : CLI_EXIT_OK;
   json_decref(rows);

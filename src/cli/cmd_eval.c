@@ -29,8 +29,8 @@ static void eval_usage(FILE *out) {
 }
 
 /* Apply one "name=value" assignment to the parameter vector. */
-static cf_status apply_param(cf_model_id model, const char *assignment,
-                             double *params, int *given, cf_error *err) {
+static cf_status apply_param(cf_model_id model, const char *assignment, double *params, int *given,
+                             cf_error *err) {
   const char *equals = strchr(assignment, '=');
   if (!equals || equals == assignment)
     return cf_error_set(err, CF_EINVAL,
@@ -48,8 +48,7 @@ static cf_status apply_param(cf_model_id model, const char *assignment,
   const cf_param_info *info = NULL;
   cf_status s = cf_model_param_find(model, name, &slot, &info, err);
   if (s != CF_OK) return s;
-  if (given[slot])
-    return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
+  if (given[slot]) return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
 
   char what[96];
   snprintf(what, sizeof what, "--param %s", name);
@@ -89,8 +88,7 @@ static json_t *gradient_json(const cf_model_info *m, const double *grad) {
     json_t *rows = json_array();
     for (int c = 0; c < 3; ++c) {
       const double *row = grad + c * m->dim + slot;
-      json_array_append_new(rows, info->components == 3 ? json_doubles(row, 3)
-                                                        : json_real(row[0]));
+      json_array_append_new(rows, info->components == 3 ? json_doubles(row, 3) : json_real(row[0]));
     }
     json_object_set_new(object, info->name, rows);
   }
@@ -99,17 +97,23 @@ static json_t *gradient_json(const cf_model_info *m, const double *grad) {
 
 int cmd_eval(int argc, char **argv, cli_context *ctx) {
   (void)ctx;
-  enum { OPT_MODEL = 'm', OPT_PARAM = 'p', OPT_LIGHT = 'l', OPT_VIEW = 'v',
-         OPT_NORMAL = 'n', OPT_GRAD = 'g', OPT_HELP = 'h' };
-  static const struct option options[] = {
-      {"model", required_argument, NULL, OPT_MODEL},
-      {"param", required_argument, NULL, OPT_PARAM},
-      {"light", required_argument, NULL, OPT_LIGHT},
-      {"view", required_argument, NULL, OPT_VIEW},
-      {"normal", required_argument, NULL, OPT_NORMAL},
-      {"grad", no_argument, NULL, OPT_GRAD},
-      {"help", no_argument, NULL, OPT_HELP},
-      {0}};
+  enum {
+    OPT_MODEL = 'm',
+    OPT_PARAM = 'p',
+    OPT_LIGHT = 'l',
+    OPT_VIEW = 'v',
+    OPT_NORMAL = 'n',
+    OPT_GRAD = 'g',
+    OPT_HELP = 'h'
+  };
+  static const struct option options[] = {{"model", required_argument, NULL, OPT_MODEL},
+                                          {"param", required_argument, NULL, OPT_PARAM},
+                                          {"light", required_argument, NULL, OPT_LIGHT},
+                                          {"view", required_argument, NULL, OPT_VIEW},
+                                          {"normal", required_argument, NULL, OPT_NORMAL},
+                                          {"grad", no_argument, NULL, OPT_GRAD},
+                                          {"help", no_argument, NULL, OPT_HELP},
+                                          {0}};
   const char *model_text = NULL, *light_text = NULL, *view_text = NULL;
   const char *normal_text = "0,0,1";
   const char *assignments[MAX_PARAM_ASSIGNMENTS];
@@ -118,11 +122,21 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
   opterr = 0;
   for (int c; (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
     switch (c) {
-      case OPT_MODEL: model_text = optarg; break;
-      case OPT_LIGHT: light_text = optarg; break;
-      case OPT_VIEW: view_text = optarg; break;
-      case OPT_NORMAL: normal_text = optarg; break;
-      case OPT_GRAD: want_grad = 1; break;
+      case OPT_MODEL:
+        model_text = optarg;
+        break;
+      case OPT_LIGHT:
+        light_text = optarg;
+        break;
+      case OPT_VIEW:
+        view_text = optarg;
+        break;
+      case OPT_NORMAL:
+        normal_text = optarg;
+        break;
+      case OPT_GRAD:
+        want_grad = 1;
+        break;
       case OPT_PARAM:
         if (assignment_count == MAX_PARAM_ASSIGNMENTS) {
           cli_report("eval", "too many --param options");
@@ -130,7 +144,9 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
         }
         assignments[assignment_count++] = optarg;
         break;
-      case OPT_HELP: eval_usage(stdout); return CLI_EXIT_OK;
+      case OPT_HELP:
+        eval_usage(stdout);
+        return CLI_EXIT_OK;
       default: {
         char message[160];
         snprintf(message, sizeof message,

@@ -10,8 +10,7 @@ void cli_print_model_table(FILE *out) {
   fprintf(out, "models (MODEL.md's ladder; code or name selects one):\n");
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     const cf_model_info *model = cf_model_info_get((cf_model_id)m);
-    fprintf(out, "  %s %-11s %s\n    parameters:", model->code, model->name,
-            model->summary);
+    fprintf(out, "  %s %-11s %s\n    parameters:", model->code, model->name, model->summary);
     for (int k = 0; k < model->param_count; ++k)
       fprintf(out, " %s", cf_param_info_get(model->params[k])->name);
     fprintf(out, "\n");
@@ -26,8 +25,8 @@ void cli_print_model_table(FILE *out) {
     char range[32];
     snprintf(range, sizeof range, "[%g, %g]", info->lower, info->upper);
     fprintf(out, "  %-18s %-5s %-4s %-8g %-15s %s\n", info->name,
-            info->components == 3 ? "RGB" : "1", info->unit,
-            info->default_value, range, info->meaning);
+            info->components == 3 ? "RGB" : "1", info->unit, info->default_value, range,
+            info->meaning);
   }
 }
 
@@ -39,17 +38,14 @@ static json_t *model_table_json(void) {
     for (int k = 0; k < model->param_count; ++k) {
       const cf_param_info *info = cf_param_info_get(model->params[k]);
       json_array_append_new(
-          params, json_pack("{s:s, s:s, s:i, s:i, s:s, s:f, s:f, s:f, s:s}",
-                            "name", info->name, "symbol", info->symbol,
-                            "components", info->components, "offset",
-                            model->offsets[k], "unit", info->unit, "default",
-                            info->default_value, "lower", info->lower, "upper",
-                            info->upper, "meaning", info->meaning));
+          params, json_pack("{s:s, s:s, s:i, s:i, s:s, s:f, s:f, s:f, s:s}", "name", info->name,
+                            "symbol", info->symbol, "components", info->components, "offset",
+                            model->offsets[k], "unit", info->unit, "default", info->default_value,
+                            "lower", info->lower, "upper", info->upper, "meaning", info->meaning));
     }
     json_array_append_new(
-        models, json_pack("{s:s, s:s, s:s, s:i, s:o}", "code", model->code,
-                          "name", model->name, "summary", model->summary,
-                          "dim", model->dim, "parameters", params));
+        models, json_pack("{s:s, s:s, s:s, s:i, s:o}", "code", model->code, "name", model->name,
+                          "summary", model->summary, "dim", model->dim, "parameters", params));
   }
   return json_pack("{s:o}", "models", models);
 }

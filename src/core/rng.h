@@ -59,8 +59,7 @@ static inline void cf_rng_unit_vector(cf_rng *r, double out[3]) {
 }
 
 /* A unit vector uniformly distributed on the hemisphere around unit n. */
-static inline void cf_rng_hemisphere(cf_rng *r, const double n[3],
-                                     double out[3]) {
+static inline void cf_rng_hemisphere(cf_rng *r, const double n[3], double out[3]) {
   cf_rng_unit_vector(r, out);
   double d = out[0] * n[0] + out[1] * n[1] + out[2] * n[2];
   if (d < 0.0)

@@ -34,8 +34,7 @@ static void mark_truncated(char *buffer, size_t size, int written) {
   memcpy(buffer + size - 4, "...", 4);
 }
 
-cf_status cf_error_set(cf_error *err, cf_status status, const char *format,
-                       ...) {
+cf_status cf_error_set(cf_error *err, cf_status status, const char *format, ...) {
   if (!err) return status;
   err->status = status;
   va_list args;
@@ -55,7 +54,6 @@ void cf_error_prefix(cf_error *err, const char *format, ...) {
   va_end(args);
   char old[CF_ERROR_MESSAGE_SIZE];
   memcpy(old, err->message, sizeof old);
-  int written =
-      snprintf(err->message, sizeof err->message, "%s: %s", prefix, old);
+  int written = snprintf(err->message, sizeof err->message, "%s: %s", prefix, old);
   mark_truncated(err->message, sizeof err->message, written);
 }

@@ -46,8 +46,7 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
   /* step 6: F̄_i = 1 − (1 − F̄_e)/η1², F̄_e = F0_1 + (1 − F0_1)/21, so
    * (1 − F̄_e)/η1² = (20/21)(1 − s)³/(1 + s); K = 1/(1 − ρ F̄_i e^{−4τ}) */
   double fbar_i = 1.0 - (20.0 / 21.0) * one_m * one_m * one_m / one_p;
-  double d_fbar_i =
-      (20.0 / 21.0) * one_m * one_m * (4.0 + 2.0 * s) / (one_p * one_p) * ds;
+  double d_fbar_i = (20.0 / 21.0) * one_m * one_m * (4.0 + 2.0 * s) / (one_p * one_p) * ds;
   for (int c = 0; c < 3; ++c) {
     double rho = params[CF_CLAY_ALBEDO + c];
     double tau = params[CF_CLAY_OPTICAL_DEPTH + c];
@@ -80,8 +79,8 @@ static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
   return r;
 }
 
-CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
-                             double f[3], double *grad, cf_clay_terms *terms) {
+CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
+                                double *grad, cf_clay_terms *terms) {
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
@@ -116,8 +115,8 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
   double w_b = (1.0 - weight_ib) * (1.0 - weight_ob);
   double transmission_b = one_minus_f0_2 * one_minus_f0_2 * w_b;
   const refracted_cos *larger = ri.c > ro.c ? &ri : &ro; /* max(c_i', c_o') */
-  double x = g_b > 0.0 ? g_b * larger->inv_c : 0.0;     /* ON's angular factor */
-  double on = (p->on.a + p->on.b * x) * CF_INV_PI; /* ON / ρ */
+  double x = g_b > 0.0 ? g_b * larger->inv_c : 0.0;      /* ON's angular factor */
+  double on = (p->on.a + p->on.b * x) * CF_INV_PI;       /* ON / ρ */
 
   /* step 8: combine per channel; phi = T T a / η1² */
   double absorption[3], phi[3], base[3];
@@ -142,8 +141,7 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
 
   /* ---- derivatives ---- */
   /* top lobe */
-  double dtop_dr1 =
-      fresnel_1 * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
+  double dtop_dr1 = fresnel_1 * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
   double dtop_df0_1 = (1.0 - weight_d) * d1.value * v1.value;
   double dtransmission = -2.0 * one_minus_f0_1 * w;
 
@@ -162,19 +160,16 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
       (1.0 - p->f0_2) * schlick_weight_dc(hb.c_d) * d_c_d_b * d2.value * v2.value +
       fresnel_2 * d2.d_sin2 * d_sin2_b * v2.value +
       fresnel_2 * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
-  double dbase_spec_dr2 =
-      fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
+  double dbase_spec_dr2 = fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
   double dbase_spec_df0_2 = (1.0 - weight_db) * d2.value * v2.value;
 
   /* base diffuse: transmissions into the clay, and the angular factor */
-  double dtransmission_b_df0_1 =
-      one_minus_f0_2 * one_minus_f0_2 *
-      (-schlick_weight_dc(ri.c) * ri.d_c * (1.0 - weight_ob) -
-       (1.0 - weight_ib) * schlick_weight_dc(ro.c) * ro.d_c);
+  double dtransmission_b_df0_1 = one_minus_f0_2 * one_minus_f0_2 *
+                                 (-schlick_weight_dc(ri.c) * ri.d_c * (1.0 - weight_ob) -
+                                  (1.0 - weight_ib) * schlick_weight_dc(ro.c) * ro.d_c);
   double dtransmission_b_df0_2 = -2.0 * one_minus_f0_2 * w_b;
   double dx_df0_1 = 0.0;
-  if (g_b > 0.0)
-    dx_df0_1 = (d_g_b - g_b * larger->d_c * larger->inv_c) * larger->inv_c;
+  if (g_b > 0.0) dx_df0_1 = (d_g_b - g_b * larger->d_c * larger->inv_c) * larger->inv_c;
   double don_df0_1 = p->on.b * dx_df0_1 * CF_INV_PI;
   double don_dsigma = (p->on.d_a + p->on.d_b * x) * CF_INV_PI;
 
@@ -195,29 +190,25 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g,
     row[CF_CLAY_DIFFUSE_ROUGHNESS] = phi[c] * k_rho * transmission_b * don_dsigma;
     row[CF_CLAY_FILM_ROUGHNESS] = dtop_dr1;
     row[CF_CLAY_FILM_F0] = dtop_df0_1 + dphi_df0_1 * base[c] + phi[c] * dbase_df0_1;
-    row[CF_CLAY_OPTICAL_DEPTH + c] =
-        phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
+    row[CF_CLAY_OPTICAL_DEPTH + c] = phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
     row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
-    row[CF_CLAY_BASE_F0] =
-        phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
+    row[CF_CLAY_BASE_F0] = phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
   }
 }
 
-static void clay_value(const cf_prepared *prep, const cf_geometry *g,
-                       double f[3]) {
+static void clay_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
   clay_eval(&prep->clay, g, f, NULL, NULL);
 }
 
-static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g,
-                            double f[3], double *grad) {
+static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
+                            double *grad) {
   /* clay_eval writes every entry but the other channels' RGB ones */
   cf_zero_other_channels(grad, DIM, CF_CLAY_ALBEDO);
   cf_zero_other_channels(grad, DIM, CF_CLAY_OPTICAL_DEPTH);
   clay_eval(&prep->clay, g, f, grad, NULL);
 }
 
-void cf_clay_terms_eval(const double *params, const cf_geometry *g,
-                        cf_clay_terms *terms) {
+void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_terms *terms) {
   *terms = (cf_clay_terms){0};
   if (!cf_geometry_is_lit(g)) return;
   cf_prepared prep;

@@ -23,9 +23,8 @@ static void clearcoat_prepare(const double *params, cf_prepared *prep) {
   p->da2_dgloss = 2.0 * a * (0.001 - 0.1);
 }
 
-CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p,
-                                  const cf_geometry *g, double f[3],
-                                  double *grad) {
+CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p, const cf_geometry *g, double f[3],
+                                     double *grad) {
   cf_dielectric_eval(&p->dielectric, g, f, grad, DIM);
   double fresnel = fresnel_schlick(coat_f0, g->weight_d);
   cf_gtr1 d1 = gtr1_d(p->a2, p->log_a2, g->sin2_h, g->cos2_h);
@@ -34,23 +33,20 @@ CF_ALWAYS_INLINE void clearcoat_eval(const cf_clearcoat_prep *p,
   double coat = p->weight * unit_coat;
   for (int c = 0; c < 3; ++c) f[c] += coat;
   if (!grad) return;
-  double dcoat_dgloss =
-      p->weight * coat_scale * fresnel * vis * d1.d_a2 * p->da2_dgloss;
+  double dcoat_dgloss = p->weight * coat_scale * fresnel * vis * d1.d_a2 * p->da2_dgloss;
   for (int c = 0; c < 3; ++c) {
     grad[c * DIM + CF_CLEARCOAT_COAT_WEIGHT] = unit_coat;
     grad[c * DIM + CF_CLEARCOAT_COAT_GLOSS] = dcoat_dgloss;
   }
 }
 
-static void clearcoat_value(const cf_prepared *prep, const cf_geometry *g,
-                            double f[3]) {
+static void clearcoat_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
   clearcoat_eval(&prep->clearcoat, g, f, NULL);
 }
 
-static void clearcoat_value_grad(const cf_prepared *prep, const cf_geometry *g,
-                                 double f[3], double *grad) {
+static void clearcoat_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
+                                 double *grad) {
   clearcoat_eval(&prep->clearcoat, g, f, grad);
 }
 
-const cf_model_impl cf_clearcoat_impl = {clearcoat_prepare, clearcoat_value,
-                                         clearcoat_value_grad};
+const cf_model_impl cf_clearcoat_impl = {clearcoat_prepare, clearcoat_value, clearcoat_value_grad};

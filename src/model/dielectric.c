@@ -4,8 +4,8 @@
 #include "models.h"
 
 void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p) {
-  cf_diffuse_prepare(params + CF_DIELECTRIC_ALBEDO,
-                     params[CF_DIELECTRIC_DIFFUSE_ROUGHNESS], &p->diffuse);
+  cf_diffuse_prepare(params + CF_DIELECTRIC_ALBEDO, params[CF_DIELECTRIC_DIFFUSE_ROUGHNESS],
+                     &p->diffuse);
   double r = params[CF_DIELECTRIC_ROUGHNESS];
   p->f0 = params[CF_DIELECTRIC_F0];
   p->a2 = (r * r) * (r * r);
@@ -16,13 +16,12 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p) {
 /* M2 and M3 share the slots of albedo, diffuse_roughness, roughness, f0. */
 _Static_assert((int)CF_DIELECTRIC_F0 == (int)CF_CLEARCOAT_F0 &&
                    (int)CF_DIELECTRIC_ROUGHNESS == (int)CF_CLEARCOAT_ROUGHNESS &&
-                   (int)CF_DIELECTRIC_DIFFUSE_ROUGHNESS ==
-                       (int)CF_CLEARCOAT_DIFFUSE_ROUGHNESS &&
+                   (int)CF_DIELECTRIC_DIFFUSE_ROUGHNESS == (int)CF_CLEARCOAT_DIFFUSE_ROUGHNESS &&
                    (int)CF_DIELECTRIC_ALBEDO == (int)CF_CLEARCOAT_ALBEDO,
                "M3 extends M2's parameter vector");
 
-void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
-                        double f[3], double *grad, int dim) {
+void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
+                        double *grad, int dim) {
   /* specular lobe */
   double fresnel = fresnel_schlick(p->f0, g->weight_d);
   cf_ggx_d d = ggx_d(p->a2, p->inv_a2, g->sin2_h, g->cos2_h);
@@ -36,8 +35,7 @@ void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
   double transmission = one_minus_f0 * one_minus_f0 * g->transmission;
   double x = g->on_angular;
   double q = p->diffuse.on.a + p->diffuse.on.b * x;
-  for (int c = 0; c < 3; ++c)
-    f[c] = specular + transmission * p->diffuse.rho_over_pi[c] * q;
+  for (int c = 0; c < 3; ++c) f[c] = specular + transmission * p->diffuse.rho_over_pi[c] * q;
   if (!grad) return;
 
   cf_zero_other_channels(grad, dim, CF_DIELECTRIC_ALBEDO);
@@ -59,13 +57,11 @@ static void dielectric_prepare(const double *params, cf_prepared *prep) {
   cf_dielectric_prepare(params, &prep->dielectric);
 }
 
-static void dielectric_value(const cf_prepared *prep, const cf_geometry *g,
-                             double f[3]) {
+static void dielectric_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
   cf_dielectric_eval(&prep->dielectric, g, f, NULL, CF_DIELECTRIC_DIM);
 }
 
-static void dielectric_value_grad(const cf_prepared *prep,
-                                  const cf_geometry *g, double f[3],
+static void dielectric_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                                   double *grad) {
   cf_dielectric_eval(&prep->dielectric, g, f, grad, CF_DIELECTRIC_DIM);
 }

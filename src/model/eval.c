@@ -17,9 +17,8 @@ static const cf_model_impl *impl_of(cf_model_id model) {
   return impls[model];
 }
 
-cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
-                  const double l[3], const double v[3], double f[3],
-                  double *grad) {
+cf_status cf_eval(cf_model_id model, const double *params, const double n[3], const double l[3],
+                  const double v[3], double f[3], double *grad) {
   cf_geometry g = cf_geometry_from_directions(n, l, v);
   return cf_eval_batch(model, params, 1, &g, f, grad);
 }
@@ -27,8 +26,7 @@ cf_status cf_eval(cf_model_id model, const double *params, const double n[3],
 /* One observation: the models are called for lit pairs only; elsewhere
  * f = 0 and its gradient is 0 (model.h, "Conventions"). */
 static inline void eval_one(const cf_model_impl *impl, const cf_prepared *prep,
-                            const cf_geometry *g, size_t row, double *f,
-                            double *grad) {
+                            const cf_geometry *g, size_t row, double *f, double *grad) {
   if (!cf_geometry_is_lit(g)) {
     f[0] = f[1] = f[2] = 0.0;
     if (grad) memset(grad, 0, row * sizeof *grad);
@@ -51,10 +49,9 @@ cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
   return CF_OK;
 }
 
-cf_status cf_eval_batch_directions(cf_model_id model, const double *params,
-                                   size_t count, const double *n,
-                                   const double *l, const double *v,
-                                   double *f, double *grad) {
+cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size_t count,
+                                   const double *n, const double *l, const double *v, double *f,
+                                   double *grad) {
   const cf_model_impl *impl = impl_of(model);
   if (!impl) return CF_EINVAL;
   cf_prepared prep;

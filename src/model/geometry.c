@@ -6,8 +6,7 @@ static inline double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-cf_geometry cf_geometry_from_directions(const double n[3], const double l[3],
-                                        const double v[3]) {
+cf_geometry cf_geometry_from_directions(const double n[3], const double l[3], const double v[3]) {
   cf_geometry g = {0};
   g.cos_i = dot3(n, l);
   g.cos_o = dot3(n, v);

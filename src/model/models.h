@@ -31,12 +31,12 @@ typedef struct cf_clay_prep {
   double rho[3];
   cf_oren_nayar_coeffs on;
   double f0_1, a2_1, inv_a2_1, da2_1; /* top interface */
-  double inv_eta, d_inv_eta;      /* 1/η1 */
-  double inv_eta2, d_inv_eta2;    /* 1/η1² */
-  double eta2_m1, d_eta2_m1;      /* η1² − 1 = 4√F0_1/(1 − √F0_1)² */
+  double inv_eta, d_inv_eta;          /* 1/η1 */
+  double inv_eta2, d_inv_eta2;        /* 1/η1² */
+  double eta2_m1, d_eta2_m1;          /* η1² − 1 = 4√F0_1/(1 − √F0_1)² */
   double tau[3];
   double k[3], dk_df0_1[3], dk_dtau[3]; /* recycling K per channel */
-  double f0_2, a2_2, inv_a2_2, da2_2; /* base interface */
+  double f0_2, a2_2, inv_a2_2, da2_2;   /* base interface */
 } cf_clay_prep;
 
 typedef union cf_prepared {
@@ -52,8 +52,7 @@ typedef union cf_prepared {
 typedef struct cf_model_impl {
   void (*prepare)(const double *params, cf_prepared *prep);
   void (*value)(const cf_prepared *prep, const cf_geometry *g, double f[3]);
-  void (*value_grad)(const cf_prepared *prep, const cf_geometry *g,
-                     double f[3], double *grad);
+  void (*value_grad)(const cf_prepared *prep, const cf_geometry *g, double f[3], double *grad);
 } cf_model_impl;
 
 extern const cf_model_impl cf_lambert_impl;
@@ -68,8 +67,8 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 
 /* M2 with its gradient written into rows of length `dim` (M3 reuses it
  * with dim 8, and writes its own two entries); grad may be NULL. */
-void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
-                        double f[3], double *grad, int dim);
+void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
+                        double *grad, int dim);
 
 /* M4 taken apart (MODEL.md step 8), for tests and reports:
  *   f_c = top + transmission · absorption_c · inv_eta2 · base_c. */
@@ -83,7 +82,6 @@ typedef struct cf_clay_terms {
 } cf_clay_terms;
 
 /* All zero where the observation is not lit. */
-void cf_clay_terms_eval(const double *params, const cf_geometry *g,
-                        cf_clay_terms *terms);
+void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_terms *terms);
 
 #endif /* CLAYFIT_MODEL_MODELS_H */

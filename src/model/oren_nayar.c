@@ -7,13 +7,12 @@ void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p) {
 }
 
 static void oren_nayar_prepare(const double *params, cf_prepared *prep) {
-  cf_diffuse_prepare(params + CF_OREN_NAYAR_ALBEDO,
-                     params[CF_OREN_NAYAR_DIFFUSE_ROUGHNESS], &prep->diffuse);
+  cf_diffuse_prepare(params + CF_OREN_NAYAR_ALBEDO, params[CF_OREN_NAYAR_DIFFUSE_ROUGHNESS],
+                     &prep->diffuse);
 }
 
-CF_ALWAYS_INLINE void oren_nayar_eval(const cf_diffuse_prep *p,
-                                   const cf_geometry *g, double f[3],
-                                   double *grad) {
+CF_ALWAYS_INLINE void oren_nayar_eval(const cf_diffuse_prep *p, const cf_geometry *g, double f[3],
+                                      double *grad) {
   enum { DIM = CF_OREN_NAYAR_DIM };
   double x = g->on_angular;
   double q = p->on.a + p->on.b * x;
@@ -28,13 +27,11 @@ CF_ALWAYS_INLINE void oren_nayar_eval(const cf_diffuse_prep *p,
   }
 }
 
-static void oren_nayar_value(const cf_prepared *prep, const cf_geometry *g,
-                             double f[3]) {
+static void oren_nayar_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
   oren_nayar_eval(&prep->diffuse, g, f, NULL);
 }
 
-static void oren_nayar_value_grad(const cf_prepared *prep,
-                                  const cf_geometry *g, double f[3],
+static void oren_nayar_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                                   double *grad) {
   oren_nayar_eval(&prep->diffuse, g, f, grad);
 }

@@ -17,8 +17,8 @@ static const cf_param_info param_table[CF_PARAM_COUNT] = {
 /* Per model: its parameter ids and their first slots, in vector order. */
 #define CF__LIST_ID(M, ID) CF_PARAM_##ID,
 #define CF__LIST_SLOT(M, ID) CF_##M##_##ID,
-#define CF__MODEL_LISTS(ID, code, name, PARAMS, summary)                 \
-  static const cf_param_id ID##_params[] = {PARAMS(CF__LIST_ID, ID)};    \
+#define CF__MODEL_LISTS(ID, code, name, PARAMS, summary)              \
+  static const cf_param_id ID##_params[] = {PARAMS(CF__LIST_ID, ID)}; \
   static const int ID##_offsets[] = {PARAMS(CF__LIST_SLOT, ID)};
 CF_MODEL_MAP(CF__MODEL_LISTS)
 #undef CF__MODEL_LISTS
@@ -26,10 +26,15 @@ CF_MODEL_MAP(CF__MODEL_LISTS)
 #undef CF__LIST_SLOT
 
 static const cf_model_info model_table[CF_MODEL_COUNT] = {
-#define CF__MODEL_ROW(ID, code, name, PARAMS, summary)                 \
-  {CF_MODEL_##ID,  code,          name,        summary,                \
-   (int)(sizeof ID##_params / sizeof ID##_params[0]), ID##_params,     \
-   ID##_offsets, CF_##ID##_DIM},
+#define CF__MODEL_ROW(ID, code, name, PARAMS, summary) \
+  {CF_MODEL_##ID,                                      \
+   code,                                               \
+   name,                                               \
+   summary,                                            \
+   (int)(sizeof ID##_params / sizeof ID##_params[0]),  \
+   ID##_params,                                        \
+   ID##_offsets,                                       \
+   CF_##ID##_DIM},
     CF_MODEL_MAP(CF__MODEL_ROW)
 #undef CF__MODEL_ROW
 };
@@ -54,8 +59,7 @@ static int same_word(const char *a, const char *b) {
   return *a == *b;
 }
 
-cf_status cf_model_find(const char *code_or_name, cf_model_id *id,
-                        cf_error *err) {
+cf_status cf_model_find(const char *code_or_name, cf_model_id *id, cf_error *err) {
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     if (same_word(code_or_name, model_table[m].code) ||
         same_word(code_or_name, model_table[m].name)) {
@@ -66,12 +70,12 @@ cf_status cf_model_find(const char *code_or_name, cf_model_id *id,
   char known[256] = "";
   size_t used = 0;
   for (int m = 0; m < CF_MODEL_COUNT && used < sizeof known; ++m) {
-    int n = snprintf(known + used, sizeof known - used, "%s%s (%s)",
-                     m ? ", " : "", model_table[m].code, model_table[m].name);
+    int n = snprintf(known + used, sizeof known - used, "%s%s (%s)", m ? ", " : "",
+                     model_table[m].code, model_table[m].name);
     if (n > 0) used += (size_t)n;
   }
-  return cf_error_set(err, CF_ENOTFOUND, "unknown model '%s'; the models are %s",
-                      code_or_name, known);
+  return cf_error_set(err, CF_ENOTFOUND, "unknown model '%s'; the models are %s", code_or_name,
+                      known);
 }
 
 cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
@@ -89,18 +93,17 @@ cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
   char known[512] = "";
   size_t used = 0;
   for (int k = 0; k < m->param_count && used < sizeof known; ++k) {
-    int n = snprintf(known + used, sizeof known - used, "%s%s",
-                     k ? ", " : "", param_table[m->params[k]].name);
+    int n = snprintf(known + used, sizeof known - used, "%s%s", k ? ", " : "",
+                     param_table[m->params[k]].name);
     if (n > 0) used += (size_t)n;
   }
   return cf_error_set(err, CF_ENOTFOUND,
-                      "model %s (%s) has no parameter '%s'; its parameters are %s",
-                      m->code, m->name, name, known);
+                      "model %s (%s) has no parameter '%s'; its parameters are %s", m->code,
+                      m->name, name, known);
 }
 
 /* The parameter that owns vector entry k, and the entry's channel. */
-static const cf_param_info *slot_owner(const cf_model_info *m, int k,
-                                       int *channel) {
+static const cf_param_info *slot_owner(const cf_model_info *m, int k, int *channel) {
   for (int j = m->param_count - 1; j >= 0; --j) {
     if (k >= m->offsets[j]) {
       *channel = k - m->offsets[j];
@@ -110,12 +113,10 @@ static const cf_param_info *slot_owner(const cf_model_info *m, int k,
   return NULL;
 }
 
-const char *cf_model_slot_name(cf_model_id model, int k, char *buf,
-                               size_t size) {
+const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size) {
   const cf_model_info *m = cf_model_info_get(model);
   int channel = 0;
-  const cf_param_info *p =
-      (m && k >= 0 && k < m->dim) ? slot_owner(m, k, &channel) : NULL;
+  const cf_param_info *p = (m && k >= 0 && k < m->dim) ? slot_owner(m, k, &channel) : NULL;
   if (!p)
     snprintf(buf, size, "#%d", k);
   else if (p->components == 3)
@@ -130,13 +131,11 @@ void cf_model_default_params(cf_model_id model, double *params) {
   if (!m) return;
   for (int j = 0; j < m->param_count; ++j) {
     const cf_param_info *p = &param_table[m->params[j]];
-    for (int c = 0; c < p->components; ++c)
-      params[m->offsets[j] + c] = p->default_value;
+    for (int c = 0; c < p->components; ++c) params[m->offsets[j] + c] = p->default_value;
   }
 }
 
-cf_status cf_params_check(cf_model_id model, const double *params,
-                          cf_error *err) {
+cf_status cf_params_check(cf_model_id model, const double *params, cf_error *err) {
   const cf_model_info *m = cf_model_info_get(model);
   if (!m) return cf_error_set(err, CF_EINVAL, "invalid model id %d", (int)model);
   for (int k = 0; k < m->dim; ++k) {
@@ -145,8 +144,8 @@ cf_status cf_params_check(cf_model_id model, const double *params,
     char name[64];
     cf_model_slot_name(model, k, name, sizeof name);
     if (!isfinite(params[k]))
-      return cf_error_set(err, CF_EINVAL, "parameter %s of model %s is %g; it must be finite",
-                          name, m->name, params[k]);
+      return cf_error_set(err, CF_EINVAL, "parameter %s of model %s is %g; it must be finite", name,
+                          m->name, params[k]);
     if (params[k] < p->lower || params[k] > p->upper)
       return cf_error_set(err, CF_ERANGE,
                           "parameter %s of model %s is %.17g, outside its range [%g, %g] (%s)",

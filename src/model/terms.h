@@ -53,11 +53,11 @@ static inline double fresnel_schlick(double f0, double weight) {
  * invariants: |l + v|² = t² + (c_i + c_o)², sin²θ_h = t²/|l + v|²,
  * cos²θ_h = (c_i + c_o)²/|l + v|², c_d = |l + v|/2 = v·h = l·h. */
 typedef struct cf_half_vector {
-  double s_sq;   /* |l + v|² */
+  double s_sq;     /* |l + v|² */
   double inv_s_sq; /* 1 / |l + v|² */
-  double sin2_h; /* sin²θ_h */
-  double cos2_h; /* cos²θ_h */
-  double c_d;    /* |l + v| / 2 */
+  double sin2_h;   /* sin²θ_h */
+  double cos2_h;   /* cos²θ_h */
+  double c_d;      /* |l + v| / 2 */
 } cf_half_vector;
 
 static inline cf_half_vector half_vector(double t_sq, double c_sum) {
@@ -81,8 +81,7 @@ typedef struct cf_ggx_d {
   double value, d_a2, d_sin2;
 } cf_ggx_d;
 
-static inline cf_ggx_d ggx_d(double a2, double inv_a2, double sin2_h,
-                             double cos2_h) {
+static inline cf_ggx_d ggx_d(double a2, double inv_a2, double sin2_h, double cos2_h) {
   cf_ggx_d d;
   double q = sin2_h + a2 * cos2_h; /* >= α² cos²θ_h > 0 when lit */
   double inv_q = 1.0 / q;
@@ -108,9 +107,8 @@ static inline cf_smith_v smith_ggx_v(double a2, double c_i, double c_o) {
   s.value = 0.5 * inv_den;
   double v2 = 2.0 * s.value * s.value; /* −∂V/∂den = 0.5/den² */
   double inv_lambda_i = 1.0 / lambda_i, inv_lambda_o = 1.0 / lambda_o;
-  s.d_a2 = -0.5 * v2 *
-           (c_o * (1.0 - c_i * c_i) * inv_lambda_i +
-            c_i * (1.0 - c_o * c_o) * inv_lambda_o);
+  s.d_a2 =
+      -0.5 * v2 * (c_o * (1.0 - c_i * c_i) * inv_lambda_i + c_i * (1.0 - c_o * c_o) * inv_lambda_o);
   s.d_ci = -v2 * (lambda_o + c_o * c_i * (1.0 - a2) * inv_lambda_i);
   s.d_co = -v2 * (lambda_i + c_i * c_o * (1.0 - a2) * inv_lambda_o);
   return s;
@@ -136,8 +134,7 @@ typedef struct cf_gtr1 {
   double value, d_a2;
 } cf_gtr1;
 
-static inline cf_gtr1 gtr1_d(double a2, double log_a2, double sin2_h,
-                             double cos2_h) {
+static inline cf_gtr1 gtr1_d(double a2, double log_a2, double sin2_h, double cos2_h) {
   cf_gtr1 d;
   double q = sin2_h + a2 * cos2_h;
   d.value = (a2 - 1.0) / (CF_PI * log_a2 * q);

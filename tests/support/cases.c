@@ -3,15 +3,13 @@
 #include <math.h>
 #include <string.h>
 
-void random_params(cf_rng *rng, cf_model_id model, double p_bound,
-                   double *params) {
+void random_params(cf_rng *rng, cf_model_id model, double p_bound, double *params) {
   const cf_model_info *m = cf_model_info_get(model);
   for (int j = 0; j < m->param_count; ++j) {
     const cf_param_info *p = cf_param_info_get(m->params[j]);
     for (int c = 0; c < p->components; ++c) {
       double x = cf_rng_range(rng, p->lower, p->upper);
-      if (cf_rng_uniform(rng) < p_bound)
-        x = cf_rng_uniform(rng) < 0.5 ? p->lower : p->upper;
+      if (cf_rng_uniform(rng) < p_bound) x = cf_rng_uniform(rng) < 0.5 ? p->lower : p->upper;
       params[m->offsets[j] + c] = x;
     }
   }
@@ -32,21 +30,23 @@ static void to_frame(const double n[3], const double a[3], double out[3]) {
   for (int k = 0; k < 3; ++k) t[k] -= d * n[k];
   double len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
   for (int k = 0; k < 3; ++k) t[k] /= len;
-  double b[3] = {n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2],
-                 n[0] * t[1] - n[1] * t[0]};
+  double b[3] = {n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0]};
   for (int k = 0; k < 3; ++k) out[k] = a[0] * t[k] + a[1] * b[k] + a[2] * n[k];
 }
 
-void random_directions(cf_rng *rng, double p_grazing, double p_equal,
-                       double n[3], double l[3], double v[3]) {
+void random_directions(cf_rng *rng, double p_grazing, double p_equal, double n[3], double l[3],
+                       double v[3]) {
   cf_rng_unit_vector(rng, n);
   double ci = cf_rng_uniform(rng), co = cf_rng_uniform(rng);
   if (cf_rng_uniform(rng) < p_grazing) {
     double u = cf_rng_uniform(rng);
     double tiny = pow(10.0, -1.0 - 11.0 * cf_rng_uniform(rng));
-    if (u < 1.0 / 3.0) ci = tiny;
-    else if (u < 2.0 / 3.0) co = tiny;
-    else ci = co = tiny;
+    if (u < 1.0 / 3.0)
+      ci = tiny;
+    else if (u < 2.0 / 3.0)
+      co = tiny;
+    else
+      ci = co = tiny;
   }
   double a[3], b[3];
   double phi_i = 2.0 * M_PI * cf_rng_uniform(rng);
@@ -60,8 +60,7 @@ void random_directions(cf_rng *rng, double p_grazing, double p_equal,
     to_frame(n, b, v);
 }
 
-size_t hard_geometries(double (*n)[3], double (*l)[3], double (*v)[3],
-                       size_t max) {
+size_t hard_geometries(double (*n)[3], double (*l)[3], double (*v)[3], size_t max) {
   static const double cosines[] = {1.0, 0.5, 1e-3, 1e-8, 1e-150, 1e-300, 0.0};
   enum { NC = sizeof cosines / sizeof cosines[0] };
   static const double tilted[3] = {0.36, -0.48, 0.8};
@@ -98,8 +97,7 @@ size_t hard_geometries(double (*n)[3], double (*l)[3], double (*v)[3],
 }
 
 /* Values each parameter takes on the grid. */
-static int extreme_values(const cf_param_info *p, cf_model_id model,
-                          double out[4]) {
+static int extreme_values(const cf_param_info *p, cf_model_id model, double out[4]) {
   int k = 0;
   out[k++] = p->lower;
   out[k++] = p->upper;
@@ -108,8 +106,7 @@ static int extreme_values(const cf_param_info *p, cf_model_id model,
   return k;
 }
 
-long for_each_extreme_params(cf_model_id model,
-                             void (*visit)(const double *params, void *user),
+long for_each_extreme_params(cf_model_id model, void (*visit)(const double *params, void *user),
                              void *user) {
   const cf_model_info *m = cf_model_info_get(model);
   int index[16] = {0}, size[16];
@@ -121,8 +118,7 @@ long for_each_extreme_params(cf_model_id model,
     double params[CF_MAX_DIM];
     for (int j = 0; j < m->param_count; ++j) {
       const cf_param_info *p = cf_param_info_get(m->params[j]);
-      for (int c = 0; c < p->components; ++c)
-        params[m->offsets[j] + c] = values[j][index[j]];
+      for (int c = 0; c < p->components; ++c) params[m->offsets[j] + c] = values[j][index[j]];
     }
     visit(params, user);
     ++visited;
@@ -133,18 +129,16 @@ long for_each_extreme_params(cf_model_id model,
   return visited;
 }
 
-static void eval_at(cf_model_id model, const double *params, int k, double x,
-                    const double n[3], const double l[3], const double v[3],
-                    double f[3]) {
+static void eval_at(cf_model_id model, const double *params, int k, double x, const double n[3],
+                    const double l[3], const double v[3], double f[3]) {
   double p[CF_MAX_DIM];
   memcpy(p, params, sizeof p);
   p[k] = x;
   cf_eval(model, p, n, l, v, f, NULL);
 }
 
-void finite_difference(cf_model_id model, const double *params, int k,
-                       const double n[3], const double l[3],
-                       const double v[3], double g_fd[3], double quotient[3],
+void finite_difference(cf_model_id model, const double *params, int k, const double n[3],
+                       const double l[3], const double v[3], double g_fd[3], double quotient[3],
                        int *one_sided) {
   const cf_model_info *m = cf_model_info_get(model);
   const cf_param_info *p = NULL;

@@ -12,22 +12,21 @@ typedef struct check_state {
 
 extern check_state check_global;
 
-#define CHECK(cond, ...)                                                  \
-  do {                                                                    \
-    ++check_global.checks;                                                \
-    if (!(cond)) {                                                        \
-      if (++check_global.failures <= 20) {                                \
+#define CHECK(cond, ...)                                                         \
+  do {                                                                           \
+    ++check_global.checks;                                                       \
+    if (!(cond)) {                                                               \
+      if (++check_global.failures <= 20) {                                       \
         fprintf(stderr, "%s:%d: CHECK(%s) failed: ", __FILE__, __LINE__, #cond); \
-        fprintf(stderr, __VA_ARGS__);                                     \
-        fputc('\n', stderr);                                              \
-      }                                                                   \
-    }                                                                     \
+        fprintf(stderr, __VA_ARGS__);                                            \
+        fputc('\n', stderr);                                                     \
+      }                                                                          \
+    }                                                                            \
   } while (0)
 
 /* Print the summary; return the process exit status (0 = all passed). */
 static inline int check_finish(const char *name) {
-  printf("%s: %ld checks, %ld failed\n", name, check_global.checks,
-         check_global.failures);
+  printf("%s: %ld checks, %ld failed\n", name, check_global.checks, check_global.failures);
   return check_global.failures ? 1 : 0;
 }
 
