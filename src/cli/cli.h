@@ -23,4 +23,8 @@ void cli_print_model_table(FILE *out);
 /* Report an error on stderr as "clayfit <command>: <message>". */
 void cli_report(const char *command, const char *message);
 
+/* Report the option getopt_long rejected (call with opterr = 0 after it
+ * returned '?'); returns CLI_EXIT_USAGE. */
+int cli_bad_option(const char *command, char **argv);
+
 #endif /* CLAYFIT_CLI_CLI_H */

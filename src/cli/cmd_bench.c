@@ -138,8 +138,7 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
       bench_usage(stdout);
       return CLI_EXIT_OK;
     } else {
-      bench_usage(stderr);
-      return CLI_EXIT_USAGE;
+      return cli_bad_option("bench", argv);
     }
     if (s != CF_OK) {
       cli_report("bench", err.message);

@@ -147,14 +147,8 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
       case OPT_HELP:
         eval_usage(stdout);
         return CLI_EXIT_OK;
-      default: {
-        char message[160];
-        snprintf(message, sizeof message,
-                 "unknown option or missing value in '%s' (see clayfit eval --help)",
-                 argv[optind - 1]);
-        cli_report("eval", message);
-        return CLI_EXIT_USAGE;
-      }
+      default:
+        return cli_bad_option("eval", argv);
     }
   }
   if (optind < argc) {

@@ -56,6 +56,7 @@ int cmd_models(int argc, char **argv, cli_context *ctx) {
       {"json", no_argument, NULL, 'j'}, {"help", no_argument, NULL, 'h'}, {0}};
   int as_json = 0;
   optind = 1;
+  opterr = 0;
   for (int c; (c = getopt_long(argc, argv, "jh", options, NULL)) != -1;) {
     if (c == 'j') {
       as_json = 1;
@@ -64,7 +65,7 @@ int cmd_models(int argc, char **argv, cli_context *ctx) {
       cli_print_model_table(stdout);
       return CLI_EXIT_OK;
     } else {
-      return CLI_EXIT_USAGE;
+      return cli_bad_option("models", argv);
     }
   }
   if (optind < argc) {

@@ -1,4 +1,5 @@
 /* clayfit: measure what clay looks like. Dispatches to the subcommands. */
+#include <getopt.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -19,6 +20,12 @@ enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };
 
 void cli_report(const char *command_name, const char *message) {
   fprintf(stderr, "clayfit %s: %s\n", command_name, message);
+}
+
+int cli_bad_option(const char *command_name, char **argv) {
+  fprintf(stderr, "clayfit %s: unknown option or missing value in '%s' (see clayfit %s --help)\n",
+          command_name, argv[optind - 1], command_name);
+  return CLI_EXIT_USAGE;
 }
 
 static void usage(FILE *out) {
