@@ -171,7 +171,9 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
     double params[CF_MAX_DIM];
     cf_model_default_params(info->id, params);
     for (int mode = 0; mode < MODE_COUNT; ++mode) {
-      if (!ctx->quiet) fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
+      /* the table's rows show progress; with --json, a line on stderr */
+      if (as_json && !ctx->quiet)
+        fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
       timing t = time_mode(&d, info->id, params, (bench_mode)mode, min_time);
       json_array_append_new(
           rows,
@@ -187,7 +189,7 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
       }
     }
   }
-  if (!ctx->quiet) fprintf(stderr, "\r%60s\r", "");
+  if (as_json && !ctx->quiet) fprintf(stderr, "\r%60s\r", "");
   bench_data_free(&d);
   if (as_json)
     return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval", "observations",
