@@ -32,4 +32,7 @@ static inline int check_finish(const char *name) {
 
 #define CHECK_MAIN_STATE check_state check_global = {0, 0}
 
+/* The exit status that tells ctest a test was skipped (SKIP_RETURN_CODE). */
+#define CHECK_SKIPPED 77
+
 #endif /* CLAYFIT_TEST_CHECK_H */

@@ -1,0 +1,93 @@
+/* clayfit: images. Every image clayfit reads or writes goes through
+ * OpenImageIO (behind this C interface); colour decoding turns stored
+ * values into linear radiance.
+ *
+ * Pixels are float, interleaved, row-major with the top row first:
+ * pixels[(y * width + x) * channels + c]. Pixel (x, y) has its centre at
+ * (x + 0.5, y + 0.5) in COLMAP's continuous pixel coordinates. */
+#ifndef CLAYFIT_IMAGE_H
+#define CLAYFIT_IMAGE_H
+
+#include <stddef.h>
+
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cf_image {
+  int width, height, channels;
+  float *pixels; /* width × height × channels, owned (cf_image_free) */
+} cf_image;
+
+/* Allocate a zeroed image; CF_ENOMEM or CF_EINVAL (sizes <= 0, channels
+ * outside 1..4, or more than 2^31 values). */
+cf_status cf_image_alloc(cf_image *image, int width, int height, int channels, cf_error *err);
+void cf_image_free(cf_image *image);
+
+/* What a file says about itself. Absent metadata is NaN or "". */
+typedef struct cf_image_info {
+  char format[32];        /* OpenImageIO's format name: "openexr", "png", "jpeg", ... */
+  int bits_per_sample;    /* 8, 16 or 32 */
+  int is_float;           /* 1 for half/float data (EXR, HDR, PFM, float TIFF) */
+  double exposure_time;   /* seconds (EXIF ExposureTime) */
+  double f_number;        /* EXIF FNumber */
+  double iso;             /* EXIF PhotographicSensitivity / ISOSpeedRatings */
+} cf_image_info;
+
+/* Read a whole image as stored, without any colour transform: integer
+ * formats scaled to [0, 1] (value / (2^bits − 1)), float formats as they
+ * are. PFM comes out top row first like every other format. Errors name
+ * the file: missing, unreadable, unsupported, or more than 2^31 values.
+ * info may be NULL. Non-finite values are kept (see cf_image_check_finite). */
+cf_status cf_image_read(const char *path, cf_image *image, cf_image_info *info, cf_error *err);
+
+/* CF_EINVAL naming `path`, the first non-finite value's pixel (x, y) and
+ * channel, and how many there are, if the image holds NaN or Inf. */
+cf_status cf_image_check_finite(const cf_image *image, const char *path, cf_error *err);
+
+/* Write an image; the format follows the extension (.exr, .hdr, .pfm,
+ * .png, .tif/.tiff, .jpg/.jpeg). bits: 8 or 16 for PNG and TIFF, 8 for
+ * JPEG, 16 (half) or 32 (float) for EXR, 32 for HDR and PFM. Values are
+ * written as given (integer formats: clamped to [0, 1] and rounded); encode
+ * them first (cf_linear_to_srgb) where the file should hold sRGB. */
+cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_error *err);
+
+/* ---- colour decoding ---- */
+
+typedef enum cf_transfer {
+  CF_TRANSFER_LINEAR, /* stored value proportional to radiance */
+  CF_TRANSFER_SRGB,   /* IEC 61966-2-1 piecewise curve */
+  CF_TRANSFER_GAMMA   /* stored = linear^(1/gamma) */
+} cf_transfer;
+
+double cf_srgb_to_linear(double encoded);
+double cf_linear_to_srgb(double linear);
+
+/* How one image's stored values become linear radiance:
+ *   clipped  <=> the stored value >= clip_level (in any channel; tested
+ *                before decoding, per channel);
+ *   linear    = transfer⁻¹(stored);
+ *   radiance  = (linear − black_level) / exposure.
+ * black_level is in linear units; exposure > 0. Nothing is clamped:
+ * radiance may be slightly negative after the black level (noise). */
+typedef struct cf_decode {
+  cf_transfer transfer;
+  double gamma;       /* for CF_TRANSFER_GAMMA, > 0 */
+  double black_level; /* linear units */
+  double clip_level;  /* stored units, in (0, +inf]; +inf for never */
+  double exposure;    /* relative exposure e_k of MODEL.md's image formation */
+} cf_decode;
+
+/* Decode the first three channels of one stored pixel; returns the
+ * per-channel clip mask (bit c set when channel c is clipped). A one-
+ * channel pixel is read as grey (r = g = b). */
+unsigned cf_decode_pixel(const cf_decode *decode, const float *stored, int channels,
+                         double radiance[3]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_IMAGE_H */

@@ -1,0 +1,50 @@
+/* An environment map reduced to K directional lights by median cut
+ * (Debevec 2005, "A Median Cut Algorithm for Light Probe Sampling"), for
+ * MODEL.md's image formation ("an environment map: approximated by K
+ * directional lights"). Private to src/capture. */
+#ifndef CLAYFIT_CAPTURE_ENVMAP_H
+#define CLAYFIT_CAPTURE_ENVMAP_H
+
+#include <stddef.h>
+
+#include "clayfit/image.h"
+#include "clayfit/status.h"
+
+/* A directional light: the unit direction toward the light (world frame)
+ * and its irradiance E per linear-RGB channel, measured perpendicular to
+ * the direction (MODEL.md: L = f E c_i). */
+typedef struct cf_directional_light {
+  double direction[3];
+  double irradiance[3];
+} cf_directional_light;
+
+/* Equirectangular (latitude-longitude) convention of the map's own frame,
+ * y up: pixel column x (left to right) and row y (top to bottom) of a W × H
+ * map have their centres at u = (x + 0.5)/W, v = (y + 0.5)/H, and
+ *   θ = π v          (polar angle from +y: the top row looks up),
+ *   φ = 2π u         (azimuth),
+ *   d = (sin θ cos φ, cos θ, −sin θ sin φ).
+ * A pixel subtends dω = (2π/W)(π/H) sin θ. The map's values are radiance.
+ * `rotation` (row-major 3 × 3, orthonormal) takes map-frame directions to
+ * the world frame: d_world = rotation · d_map. */
+void cf_envmap_direction(int width, int height, double x, double y, double d[3]);
+
+typedef struct cf_envmap_report {
+  size_t clamped;   /* negative or non-finite values set to 0 */
+  double total[3];  /* Σ L dω over the map, per channel (irradiance units) */
+} cf_envmap_report;
+
+/* Reduce a linear-RGB equirectangular map (3 or 4 channels; a 4th is
+ * ignored) to k directional lights, k in [1, 4096]. Regions are split at
+ * the median of their energy (luminance·dω) along their longer side
+ * (measured on the sphere: widths scaled by sin θ), always splitting the
+ * region of the largest energy next, so any k works. Each light is at its
+ * region's energy-weighted mean direction (normalised) and carries the
+ * region's Σ L dω per channel, so the lights' total equals the map's.
+ * Negative or non-finite values count as 0 and are reported (the caller
+ * warns). `lights` holds k entries. */
+cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], int k,
+                               cf_directional_light *lights, cf_envmap_report *report,
+                               cf_error *err);
+
+#endif /* CLAYFIT_CAPTURE_ENVMAP_H */

@@ -1,0 +1,99 @@
+/* Whole-file reading and path handling (src/core/file.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "core/file.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size,
+                       cf_error *err) {
+  *data = NULL;
+  *size = 0;
+  struct stat st;
+  if (stat(path, &st) != 0) {
+    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file", path);
+    return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  }
+  if (!S_ISREG(st.st_mode)) return cf_error_set(err, CF_EIO, "%s: not a regular file", path);
+  if ((unsigned long long)st.st_size > (unsigned long long)max_size)
+    return cf_error_set(err, CF_ERANGE, "%s: %lld bytes, more than the %zu this reader accepts",
+                        path, (long long)st.st_size, max_size);
+  FILE *file = fopen(path, "rb");
+  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  size_t expected = (size_t)st.st_size;
+  char *buffer = malloc(expected + 1);
+  if (!buffer) {
+    fclose(file);
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory for %zu bytes", path, expected);
+  }
+  size_t got = fread(buffer, 1, expected, file);
+  int failed = ferror(file) || fgetc(file) != EOF; /* changed while reading */
+  fclose(file);
+  if (got != expected || failed) {
+    free(buffer);
+    return cf_error_set(err, CF_EIO, "%s: read %zu of %zu bytes", path, got, expected);
+  }
+  buffer[got] = '\0';
+  *data = buffer;
+  *size = got;
+  return CF_OK;
+}
+
+cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err) {
+  FILE *file = fopen(path, "wb");
+  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  size_t put = fwrite(data, 1, size, file);
+  int failed = fclose(file) != 0 || put != size;
+  if (failed) return cf_error_set(err, CF_EIO, "%s: could not write %zu bytes", path, size);
+  return CF_OK;
+}
+
+cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size,
+                       cf_error *err) {
+  int n;
+  if (!dir || !dir[0] || name[0] == '/')
+    n = snprintf(out, size, "%s", name);
+  else
+    n = snprintf(out, size, "%s%s%s", dir, dir[strlen(dir) - 1] == '/' ? "" : "/", name);
+  if (n < 0 || (size_t)n >= size)
+    return cf_error_set(err, CF_ERANGE, "path too long: %s/%s", dir ? dir : "", name);
+  return CF_OK;
+}
+
+cf_status cf_path_dirname(const char *path, char *out, size_t size, cf_error *err) {
+  const char *slash = strrchr(path, '/');
+  int n;
+  if (!slash)
+    n = snprintf(out, size, ".");
+  else if (slash == path)
+    n = snprintf(out, size, "/");
+  else
+    n = snprintf(out, size, "%.*s", (int)(slash - path), path);
+  if (n < 0 || (size_t)n >= size) return cf_error_set(err, CF_ERANGE, "path too long: %s", path);
+  return CF_OK;
+}
+
+int cf_path_exists(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0;
+}
+
+cf_status cf_make_dirs(const char *path, cf_error *err) {
+  char buffer[4096];
+  if (snprintf(buffer, sizeof buffer, "%s", path) >= (int)sizeof buffer)
+    return cf_error_set(err, CF_ERANGE, "path too long: %s", path);
+  for (char *p = buffer + 1;; ++p) {
+    if (*p == '/' || *p == '\0') {
+      char saved = *p;
+      *p = '\0';
+      if (mkdir(buffer, 0777) != 0 && errno != EEXIST)
+        return cf_error_set(err, CF_EIO, "cannot create folder %s: %s", buffer, strerror(errno));
+      *p = saved;
+      if (saved == '\0') break;
+    }
+  }
+  return CF_OK;
+}

@@ -1,0 +1,1 @@
+# tests of the colmap component: clayfit_c_test(test_... SOURCES capture/test_....c LIBS <library> LABELS capture)
