@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The main job on a fresh Debian 12 machine: installs what is missing,
-# builds in Release, and runs clayfit on its built-in default.
+# builds in Release, and runs clayfit on its built-in default capture.
 #
-# Today clayfit has its evaluator (issue 2): this runs the evaluator
-# benchmark and evaluates the default wet-clay model (M4) with its gradient.
-# The capture -> fit -> export -> report pipeline replaces this as it lands.
+# Today (issues 2 and 3): render the default synthetic capture (16 photos of
+# wet clay, model M4, with their COLMAP model), load it and draw the pixels
+# it uses, then the evaluator's benchmark and one evaluation with gradient.
+# The fit, the presets and the report join as they land.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,7 +13,16 @@ bash scripts/install-deps.sh
 bash scripts/build.sh release
 clayfit=build/release/src/cli/clayfit
 out=out/demo
+rm -rf "$out"
 mkdir -p "$out"
+
+echo
+echo "== clayfit synth: the default capture (16 photos, 640x480, wet clay M4) =="
+"$clayfit" synth -o "$out/capture"
+
+echo
+echo "== clayfit inspect: the capture as observations =="
+"$clayfit" inspect "$out/capture/capture.json" -o "$out/inspect" | tee "$out/inspect.txt"
 
 echo
 echo "== clayfit bench eval (evaluator speed, one thread) =="
@@ -21,6 +31,8 @@ echo "== clayfit bench eval (evaluator speed, one thread) =="
 echo
 echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the other side =="
 "$clayfit" eval --model clay --light 0.5,0,0.866 --view -0.342,0,0.940 --grad \
-  | tee "$out/eval-clay.json"
+  > "$out/eval-clay.json"
+head -c 600 "$out/eval-clay.json"
+echo "..."
 echo
-echo "demo: outputs in $out/"
+echo "demo: outputs in $out/ (capture/, inspect/ overlays, bench-eval.txt, eval-clay.json)"

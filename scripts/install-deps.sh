@@ -11,6 +11,7 @@ packages=(
   libopencv-dev                      # image analysis (sphere detection)
   colmap                             # camera poses (integration tests)
   python3 python3-jsonschema         # test harness: JSON Schema validation
+  clang libclang-rt-14-dev           # libFuzzer for the binary readers' fuzz target
 )
 
 missing=()

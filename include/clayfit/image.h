@@ -28,19 +28,26 @@ void cf_image_free(cf_image *image);
 
 /* What a file says about itself. Absent metadata is NaN or "". */
 typedef struct cf_image_info {
-  char format[32];        /* OpenImageIO's format name: "openexr", "png", "jpeg", ... */
-  int bits_per_sample;    /* 8, 16 or 32 */
-  int is_float;           /* 1 for half/float data (EXR, HDR, PFM, float TIFF) */
-  double exposure_time;   /* seconds (EXIF ExposureTime) */
-  double f_number;        /* EXIF FNumber */
-  double iso;             /* EXIF PhotographicSensitivity / ISOSpeedRatings */
+  char format[32];      /* OpenImageIO's format name: "openexr", "png", "jpeg", ... */
+  int bits_per_sample;  /* of the stored sample type: 8, 16 (also half) or 32 (also
+                           float and Radiance RGBE) */
+  int is_float;         /* 1 for half/float data (EXR, HDR, PFM, float TIFF) */
+  double exposure_time; /* seconds (EXIF ExposureTime) */
+  double f_number;      /* EXIF FNumber */
+  double iso;           /* EXIF PhotographicSensitivity (tag 0x8827, formerly
+                           ISOSpeedRatings; OpenImageIO 2.4 reads it as
+                           "Exif:PhotographicSensitivity") */
 } cf_image_info;
 
 /* Read a whole image as stored, without any colour transform: integer
  * formats scaled to [0, 1] (value / (2^bits − 1)), float formats as they
- * are. PFM comes out top row first like every other format. Errors name
- * the file: missing, unreadable, unsupported, or more than 2^31 values.
- * info may be NULL. Non-finite values are kept (see cf_image_check_finite). */
+ * are. PFM comes out top row first like every other format. Alpha is left
+ * as stored (never premultiplied into the colour channels), and an EXIF
+ * Orientation tag is not applied (pixels come out as stored, as COLMAP
+ * reads them). Errors name the file: missing, unreadable, unsupported,
+ * zero size, more than 4 channels, or more than 2^31 values; *image is
+ * then empty (pixels NULL). info may be NULL. Non-finite values are kept
+ * (see cf_image_check_finite). */
 cf_status cf_image_read(const char *path, cf_image *image, cf_image_info *info, cf_error *err);
 
 /* CF_EINVAL naming `path`, the first non-finite value's pixel (x, y) and
@@ -53,6 +60,14 @@ cf_status cf_image_check_finite(const cf_image *image, const char *path, cf_erro
  * written as given (integer formats: clamped to [0, 1] and rounded); encode
  * them first (cf_linear_to_srgb) where the file should hold sRGB. */
 cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_error *err);
+
+/* cf_image_write, and also the EXIF exposure time, f-number and ISO of
+ * `info` where they are finite (format, bits_per_sample and is_float are
+ * ignored; info may be NULL). JPEG and TIFF keep them in EXIF, OpenEXR
+ * as attributes; other formats may drop them. For synthetic captures and
+ * tests. */
+cf_status cf_image_write_with_info(const char *path, const cf_image *image, int bits,
+                                   const cf_image_info *info, cf_error *err);
 
 /* ---- colour decoding ---- */
 
@@ -81,8 +96,11 @@ typedef struct cf_decode {
 } cf_decode;
 
 /* Decode the first three channels of one stored pixel; returns the
- * per-channel clip mask (bit c set when channel c is clipped). A one-
- * channel pixel is read as grey (r = g = b). */
+ * per-channel clip mask (bit c set when channel c is clipped). A one- or
+ * two-channel pixel (grey, grey + alpha) is read as grey: r = g = b from
+ * channel 0, and when that is clipped all three bits are set. The transfer
+ * is extended to negative stored values by odd symmetry (−f(−x)), so noise
+ * below zero stays finite. */
 unsigned cf_decode_pixel(const cf_decode *decode, const float *stored, int channels,
                          double radiance[3]);
 

@@ -1,1 +1,7 @@
-# clayfit_capture sources beyond lights.c: target_sources(clayfit_capture PRIVATE ...)
+# clayfit_capture: capture files, lights, the sphere's surface, observations,
+# overlays, and synthetic captures.
+find_package(Threads REQUIRED)
+target_sources(clayfit_capture PRIVATE
+  json_reader.c capture_spec.c capture.c capture_views.c capture_lights.c
+  capture_surface.c observations.c overlay.c synth.c synth_scene.c)
+target_link_libraries(clayfit_capture PRIVATE PkgConfig::JANSSON Threads::Threads)

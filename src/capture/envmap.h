@@ -30,19 +30,25 @@ typedef struct cf_directional_light {
 void cf_envmap_direction(int width, int height, double x, double y, double d[3]);
 
 typedef struct cf_envmap_report {
-  size_t clamped;   /* negative or non-finite values set to 0 */
-  double total[3];  /* Σ L dω over the map, per channel (irradiance units) */
+  size_t clamped;  /* negative or non-finite values set to 0 */
+  double total[3]; /* Σ L dω over the map, per channel (irradiance units) */
 } cf_envmap_report;
 
 /* Reduce a linear-RGB equirectangular map (3 or 4 channels; a 4th is
- * ignored) to k directional lights, k in [1, 4096]. Regions are split at
- * the median of their energy (luminance·dω) along their longer side
- * (measured on the sphere: widths scaled by sin θ), always splitting the
- * region of the largest energy next, so any k works. Each light is at its
- * region's energy-weighted mean direction (normalised) and carries the
- * region's Σ L dω per channel, so the lights' total equals the map's.
- * Negative or non-finite values count as 0 and are reported (the caller
- * warns). `lights` holds k entries. */
+ * ignored) to k directional lights, k in [1, 4096] and at most the map's
+ * pixel count. Regions are split at the median of their energy
+ * (luminance·dω, BT.709 luminance 0.2126 R + 0.7152 G + 0.0722 B) along
+ * their longer side (measured on the sphere: widths scaled by sin θ at
+ * the region's middle row), always splitting the region of the largest
+ * energy next, so any k works. Each light is at its region's
+ * energy-weighted mean direction (normalised) and carries the region's
+ * Σ L dω per channel, so the lights' total equals the map's. Where that
+ * mean vanishes (a region without light, or whose light balances out, as
+ * a whole uniform map does for k = 1) the light is at the region's centre.
+ * Negative or non-finite values (of the first three channels) count as 0
+ * and are reported (the caller warns). `lights` holds k entries; rotation
+ * NULL means the identity; report may be NULL. CF_EINVAL for a bad map,
+ * k, or a rotation that is not orthonormal (to 1e-6) or not finite. */
 cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], int k,
                                cf_directional_light *lights, cf_envmap_report *report,
                                cf_error *err);

@@ -1,2 +1,5 @@
-# clayfit_image: the OpenImageIO adapter, colour decoding, environment maps.
-# add_library(clayfit_image STATIC ...) and its link libraries go here.
+# clayfit_image: the OpenImageIO adapter (the only C++ here), colour
+# decoding, environment maps.
+add_library(clayfit_image STATIC image_io.cpp image_check.c colour.c envmap.c)
+target_link_libraries(clayfit_image PUBLIC clayfit_core
+                      PRIVATE OpenImageIO::OpenImageIO clayfit_warnings m)

@@ -5,9 +5,9 @@
 #define CLAYFIT_CAPTURE_LIGHTS_H
 
 typedef enum cf_light_kind {
-  CF_LIGHT_POINT,       /* isotropic point light at a world position */
-  CF_LIGHT_FLASH,       /* isotropic point light fixed to the camera */
-  CF_LIGHT_DIRECTIONAL  /* distant light: fixed direction and irradiance */
+  CF_LIGHT_POINT,      /* isotropic point light at a world position */
+  CF_LIGHT_FLASH,      /* isotropic point light fixed to the camera */
+  CF_LIGHT_DIRECTIONAL /* distant light: fixed direction and irradiance */
 } cf_light_kind;
 
 typedef struct cf_light {

@@ -1,5 +1,7 @@
 #include "args.h"
 
+#include <stdio.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -68,5 +70,45 @@ cf_status cli_parse_count(const char *text, const char *what, long min, long max
   if (x < min || x > max)
     return cf_error_set(err, CF_ERANGE, "%s: %ld is outside [%ld, %ld]", what, x, min, max);
   *out = x;
+  return CF_OK;
+}
+
+/* Apply one "name=value" assignment to the parameter vector. */
+cf_status cli_apply_param(cf_model_id model, const char *assignment, double *params, int *given,
+                          cf_error *err) {
+  const char *equals = strchr(assignment, '=');
+  if (!equals || equals == assignment)
+    return cf_error_set(err, CF_EINVAL,
+                        "--param '%s': expected name=value (for example "
+                        "albedo=0.8,0.5,0.3 or roughness=0.4)",
+                        assignment);
+  char name[64];
+  size_t length = (size_t)(equals - assignment);
+  if (length >= sizeof name)
+    return cf_error_set(err, CF_EINVAL, "--param '%s': name too long", assignment);
+  memcpy(name, assignment, length);
+  name[length] = '\0';
+
+  int slot = 0;
+  const cf_param_info *info = NULL;
+  cf_status s = cf_model_param_find(model, name, &slot, &info, err);
+  if (s != CF_OK) return s;
+  if (given[slot]) return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
+
+  char what[96];
+  snprintf(what, sizeof what, "--param %s", name);
+  const char *value = equals + 1;
+  double x[3] = {0.0, 0.0, 0.0};
+  if (info->components == 3 && strchr(value, ',')) {
+    s = cli_parse_list(value, what, 3, x, err);
+  } else {
+    s = cli_parse_number(value, what, &x[0], err);
+    x[1] = x[2] = x[0];
+  }
+  if (s != CF_OK) return s;
+  for (int c = 0; c < info->components; ++c) {
+    params[slot + c] = x[c];
+    given[slot + c] = 1;
+  }
   return CF_OK;
 }

@@ -15,6 +15,13 @@ typedef struct cli_context {
 int cmd_eval(int argc, char **argv, cli_context *ctx);
 int cmd_models(int argc, char **argv, cli_context *ctx);
 int cmd_bench(int argc, char **argv, cli_context *ctx);
+int cmd_synth(int argc, char **argv, cli_context *ctx);
+int cmd_inspect(int argc, char **argv, cli_context *ctx);
+
+/* A progress line on stderr ("clayfit synth: rendering images 5/16"),
+ * rewritten in place; user is the command's name. Ends the line when
+ * done == total. Use only when not --quiet. */
+void cli_progress(void *user, const char *stage, size_t done, size_t total);
 
 /* The model ladder and every parameter (name, unit, default, range,
  * meaning), from the single table in clayfit/model.h. */

@@ -28,46 +28,6 @@ static void eval_usage(FILE *out) {
   cli_print_model_table(out);
 }
 
-/* Apply one "name=value" assignment to the parameter vector. */
-static cf_status apply_param(cf_model_id model, const char *assignment, double *params, int *given,
-                             cf_error *err) {
-  const char *equals = strchr(assignment, '=');
-  if (!equals || equals == assignment)
-    return cf_error_set(err, CF_EINVAL,
-                        "--param '%s': expected name=value (for example "
-                        "albedo=0.8,0.5,0.3 or roughness=0.4)",
-                        assignment);
-  char name[64];
-  size_t length = (size_t)(equals - assignment);
-  if (length >= sizeof name)
-    return cf_error_set(err, CF_EINVAL, "--param '%s': name too long", assignment);
-  memcpy(name, assignment, length);
-  name[length] = '\0';
-
-  int slot = 0;
-  const cf_param_info *info = NULL;
-  cf_status s = cf_model_param_find(model, name, &slot, &info, err);
-  if (s != CF_OK) return s;
-  if (given[slot]) return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
-
-  char what[96];
-  snprintf(what, sizeof what, "--param %s", name);
-  const char *value = equals + 1;
-  double x[3];
-  if (info->components == 3 && strchr(value, ',')) {
-    s = cli_parse_list(value, what, 3, x, err);
-  } else {
-    s = cli_parse_number(value, what, &x[0], err);
-    x[1] = x[2] = x[0];
-  }
-  if (s != CF_OK) return s;
-  for (int c = 0; c < info->components; ++c) {
-    params[slot + c] = x[c];
-    given[slot + c] = 1;
-  }
-  return CF_OK;
-}
-
 static json_t *params_json(const cf_model_info *m, const double *params) {
   json_t *object = json_object();
   for (int k = 0; k < m->param_count; ++k) {
@@ -170,7 +130,7 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
   cf_status s = cf_model_find(model_text, &model, &err);
   if (s == CF_OK) cf_model_default_params(model, params);
   for (int k = 0; s == CF_OK && k < assignment_count; ++k)
-    s = apply_param(model, assignments[k], params, given, &err);
+    s = cli_apply_param(model, assignments[k], params, given, &err);
   if (s == CF_OK) s = cf_params_check(model, params, &err);
   if (s == CF_OK) s = cli_parse_direction(light_text, "--light", l, &err);
   if (s == CF_OK) s = cli_parse_direction(view_text, "--view", v, &err);

@@ -2,6 +2,7 @@
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 
@@ -14,6 +15,8 @@ typedef struct command {
 static const command commands[] = {
     {"eval", cmd_eval, "evaluate the BRDF (and its gradient) for one set of directions"},
     {"models", cmd_models, "list the model ladder and every parameter's unit and range"},
+    {"synth", cmd_synth, "render a synthetic capture with known parameters"},
+    {"inspect", cmd_inspect, "load a capture, summarise it, draw the pixels it uses"},
     {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
 };
 enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };
@@ -26,6 +29,18 @@ int cli_bad_option(const char *command_name, char **argv) {
   fprintf(stderr, "clayfit %s: unknown option or missing value in '%s' (see clayfit %s --help)\n",
           command_name, argv[optind - 1], command_name);
   return CLI_EXIT_USAGE;
+}
+
+void cli_progress(void *user, const char *stage, size_t done, size_t total) {
+  /* on a terminal one line rewritten in place; in a log, a line at each
+   * quarter */
+  if (isatty(fileno(stderr))) {
+    fprintf(stderr, "\rclayfit %s: %s %zu/%zu", (const char *)user, stage, done, total);
+    if (done == total) fputc('\n', stderr);
+  } else if (total > 0 && (done == total || done * 4 / total != (done - (done > 0)) * 4 / total)) {
+    fprintf(stderr, "clayfit %s: %s %zu/%zu\n", (const char *)user, stage, done, total);
+  }
+  fflush(stderr);
 }
 
 static void usage(FILE *out) {

@@ -51,8 +51,7 @@ cf_status cf_write_file(const char *path, const void *data, size_t size, cf_erro
   return CF_OK;
 }
 
-cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size,
-                       cf_error *err) {
+cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size, cf_error *err) {
   int n;
   if (!dir || !dir[0] || name[0] == '/')
     n = snprintf(out, size, "%s", name);

@@ -12,16 +12,14 @@
  * treat it as a string. CF_ENOTFOUND if it does not exist, CF_EIO if it
  * cannot be read, CF_ERANGE if it is larger than max_size bytes (checked
  * before anything is allocated). Messages name the file. */
-cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size,
-                       cf_error *err);
+cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size, cf_error *err);
 
 /* Write `size` bytes to `path` (created or replaced). */
 cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err);
 
 /* `dir`/`name` into out (size bytes); `name` as it is when absolute or when
  * dir is NULL or empty. CF_ERANGE if it does not fit. */
-cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size,
-                       cf_error *err);
+cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size, cf_error *err);
 
 /* The folder part of a path ("a/b/c.json" → "a/b", "c.json" → "."). */
 cf_status cf_path_dirname(const char *path, char *out, size_t size, cf_error *err);

@@ -1,1 +1,7 @@
-# tests of the colmap component: clayfit_c_test(test_... SOURCES capture/test_....c LIBS <library> LABELS capture)
+# tests of the colmap component (the fuzz target is built by scripts/fuzz.sh)
+clayfit_c_test(test_camera_models SOURCES capture/test_camera_models.c LIBS clayfit_colmap
+               LABELS capture)
+clayfit_c_test(test_colmap_io SOURCES capture/test_colmap_io.c LIBS clayfit_colmap
+               LABELS capture)
+clayfit_c_test(test_colmap_bad_input SOURCES capture/test_colmap_bad_input.c LIBS clayfit_colmap
+               LABELS capture)

@@ -1,1 +1,8 @@
-# tests of the image component: clayfit_c_test(test_... SOURCES capture/test_....c LIBS <library> LABELS capture)
+# tests of the image component: the OpenImageIO adapter (every format both
+# ways, orientation, EXIF, errors, the real DiLiGenT files), colour
+# decoding, and environment maps reduced to lights (the real HDRIs).
+clayfit_c_test(test_image_io SOURCES capture/test_image_io.c LIBS clayfit_image LABELS capture
+               ARGS ${CLAYFIT_SHARED_DATA})
+clayfit_c_test(test_colour SOURCES capture/test_colour.c LIBS clayfit_image LABELS capture)
+clayfit_c_test(test_envmap SOURCES capture/test_envmap.c LIBS clayfit_image LABELS capture
+               ARGS ${CLAYFIT_SHARED_DATA})

@@ -1,0 +1,118 @@
+/* clayfit: a capture (photos, camera poses, the sphere, the lights) turned
+ * into observations: for each used pixel, the surface normal, the view
+ * direction, every light's direction and irradiance, the measured linear
+ * RGB and flags. This is what the fitter consumes.
+ *
+ * The capture file is described by data_schema/capture.schema.json. All
+ * directions are unit vectors in the capture's world frame (COLMAP's, or
+ * the orthographic camera's), pointing away from the surface, as
+ * include/clayfit/model.h expects them. */
+#ifndef CLAYFIT_CAPTURE_H
+#define CLAYFIT_CAPTURE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Observation flags. */
+enum {
+  CF_OBS_CLIPPED_R = 1u << 0, /* the channel reached the clip level: the */
+  CF_OBS_CLIPPED_G = 1u << 1, /* true value is at least what was measured */
+  CF_OBS_CLIPPED_B = 1u << 2,
+  CF_OBS_UNLIT = 1u << 3 /* no light reaches the point (c_i <= 0 for all) */
+};
+#define CF_OBS_CLIPPED (CF_OBS_CLIPPED_R | CF_OBS_CLIPPED_G | CF_OBS_CLIPPED_B)
+
+/* Every used pixel of every image, structure of arrays. With L = lights
+ * light slots per observation (the most any image has; unused slots carry
+ * zero irradiance):
+ *   normal[3 i + k], view[3 i + k]                  unit vectors
+ *   light_dir[3 (L i + j) + k]                     unit, toward light j
+ *   irradiance[3 (L i + j) + c]                    E of light j, channel c
+ *   rgb[3 i + c]                                    linear radiance, divided by
+ *                                                   the image's exposure e_k
+ *   flags[i], image[i] (index into the capture's images), pixel[2 i + 0/1]
+ *   (the pixel centre, COLMAP's continuous coordinates). */
+typedef struct cf_observations {
+  size_t count;
+  int lights;
+  double *normal, *view, *light_dir, *irradiance, *rgb;
+  uint8_t *flags;
+  uint32_t *image;
+  float *pixel;
+} cf_observations;
+
+/* One image's part in the capture. */
+typedef struct cf_capture_image {
+  const char *name; /* as the capture file names it */
+  const char *path; /* resolved */
+  int width, height;
+  double exposure;      /* e_k */
+  double center[3];     /* camera centre, world (COLMAP cameras) */
+  size_t observations;  /* used pixels */
+  size_t clipped;       /* of which with a clipped channel */
+  size_t sphere_pixels; /* pixels whose centre sees the sphere, before the
+                           silhouette margin and the mask */
+  int lights;           /* lights of this image */
+} cf_capture_image;
+
+/* Progress of a long load, for a progress line: stage is a short phrase
+ * ("reading images"), done of total. */
+typedef void (*cf_progress_fn)(void *user, const char *stage, size_t done, size_t total);
+
+typedef struct cf_capture_options {
+  cf_progress_fn progress; /* may be NULL */
+  void *progress_user;
+} cf_capture_options;
+
+typedef struct cf_capture cf_capture; /* opaque */
+
+/* Load a capture file and everything it names, and build the observations.
+ * Errors name the file and the field (capture file: JSON path; images:
+ * file; COLMAP models: file, line or byte, record, field). */
+cf_status cf_capture_load(const char *path, const cf_capture_options *options, cf_capture **capture,
+                          cf_error *err);
+void cf_capture_free(cf_capture *capture);
+
+const cf_observations *cf_capture_observations(const cf_capture *capture);
+size_t cf_capture_image_count(const cf_capture *capture);
+const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index);
+
+/* What a capture says about itself, for the fitter and reports. */
+typedef struct cf_capture_summary {
+  const char *name;
+  const char *camera;      /* "colmap" or "orthographic" */
+  const char *geometry;    /* "sphere", "sphere_from_silhouettes", "normal_map" */
+  double sphere_center[3]; /* world (when the camera is COLMAP's) */
+  double sphere_radius;    /* world units; 0 for an orthographic camera */
+  double sphere_rms_px;    /* silhouette reprojection error when triangulated, else 0 */
+  double silhouette_kept;  /* fraction of the silhouettes' points that fit the sphere */
+  int radiometry_relative; /* lights known only up to one common factor */
+  int tone_curve_unknown;
+  int has_noise;
+  double noise_read, noise_shot; /* variance = read² + shot · radiance */
+  size_t warnings;
+} cf_capture_summary;
+
+void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary);
+
+/* Write an 8-bit sRGB PNG of image `index` showing which pixels became
+ * observations: the photo (scaled so that its 99.5th percentile is white),
+ * the pixels used tinted green, those with a clipped channel red. */
+cf_status cf_capture_write_overlay(const cf_capture *capture, size_t index, const char *path,
+                                   cf_error *err);
+
+/* Warnings raised while loading (for example, environment-map values
+ * clamped to 0, an image that does not see the sphere). */
+const char *cf_capture_warning(const cf_capture *capture, size_t index);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_CAPTURE_H */

@@ -1,0 +1,68 @@
+/* clayfit: synthetic captures with known parameters, rendered by MODEL.md's
+ * image formation with the evaluator: a clay sphere on a textured ground
+ * inside a textured backdrop (so that COLMAP can match features), an orbit
+ * of cameras each with its flash, photon and read noise. It writes the
+ * images, the true COLMAP model (text), a capture file and truth.json: the
+ * project's default demo capture and test fixture.
+ *
+ * World frame: z up, the sphere's centre at the origin, radius 1 (world
+ * units); the ground is the plane z = -1; the backdrop a cylinder of radius
+ * 6 about the z axis. */
+#ifndef CLAYFIT_SYNTH_H
+#define CLAYFIT_SYNTH_H
+
+#include <stdint.h>
+
+#include "clayfit/capture.h"
+#include "clayfit/model.h"
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_synth_format {
+  CF_SYNTH_PNG8,  /* 8-bit sRGB PNG: what a camera gives */
+  CF_SYNTH_PNG16, /* 16-bit linear PNG */
+  CF_SYNTH_EXR    /* 32-bit float linear OpenEXR */
+} cf_synth_format;
+
+typedef struct cf_synth_options {
+  cf_model_id model;
+  double params[CF_MAX_DIM]; /* the sphere's material, in range */
+  int images;                /* cameras on the orbit, >= 1 */
+  int width, height;         /* pixels */
+  double focal_px;           /* pinhole focal length, pixels */
+  double distance;           /* camera distance from the sphere's centre, world units */
+  double flash_offset[3];    /* camera coordinates (x right, y down, z forward), world units */
+  double flash_intensity;    /* radiant intensity (grey); 0 = choose: a white Lambert surface
+                                facing the flash at `distance` has radiance 0.5 */
+  double read_noise;         /* σ of the read noise, radiance units (0 = none) */
+  double shot_noise;         /* photon noise: variance per unit radiance (0 = none) */
+  int supersample;           /* S: S×S samples per pixel near and on the sphere */
+  cf_synth_format format;
+  int silhouette_geometry; /* 1: the capture file asks for the sphere from its
+                              silhouettes instead of giving centre and radius */
+  int write_masks;         /* 1: masks/ with the sphere's pixels */
+  uint64_t seed;           /* texture layout and noise */
+  double sphere_radius_m;  /* for the capture file's scale */
+  cf_progress_fn progress; /* may be NULL */
+  void *progress_user;
+} cf_synth_options;
+
+/* Defaults: M4 at its default parameters, 16 images of 640 x 480, focal
+ * 1.2 x width, distance 5, flash 0.3 right and 0.3 up of the lens, read
+ * noise 0.002, shot noise 0.0005, 3 x 3 samples, 8-bit PNG, seed 1, a 4 cm
+ * sphere. */
+void cf_synth_default_options(cf_synth_options *options);
+
+/* Render into folder `dir` (created if missing): images/NNN.<ext>,
+ * sparse/0/{cameras,images,points3D}.txt, capture.json, truth.json, and
+ * masks/NNN.png when asked. */
+cf_status cf_synth_write(const char *dir, const cf_synth_options *options, cf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_SYNTH_H */

@@ -1,0 +1,207 @@
+/* Loading a capture (include/clayfit/capture.h): the capture file, then the
+ * cameras, the sphere's surface, the lights, and every image's pixels into
+ * observations. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "capture_internal.h"
+
+void capture_warn(cf_capture *capture, const char *format, ...) {
+  char message[CF_ERROR_MESSAGE_SIZE];
+  va_list args;
+  va_start(args, format);
+  vsnprintf(message, sizeof message, format, args);
+  va_end(args);
+  char **grown = realloc(capture->warnings, (capture->num_warnings + 1) * sizeof *grown);
+  if (!grown) return;
+  capture->warnings = grown;
+  size_t n = strlen(message) + 1;
+  if ((grown[capture->num_warnings] = malloc(n))) {
+    memcpy(grown[capture->num_warnings], message, n);
+    ++capture->num_warnings;
+  }
+}
+
+/* How image k's stored values become radiance. */
+static cf_decode image_decode(const cf_capture *capture, const cf_image_info *info,
+                              double exposure) {
+  const cf_capture_spec *spec = &capture->spec;
+  cf_decode d;
+  d.transfer = spec->transfer;
+  d.gamma = spec->gamma;
+  d.black_level = spec->black_level;
+  /* by default the largest code of an integer image is clipped; a float
+   * image has no such level */
+  d.clip_level = isnan(spec->clip_level) ? (info->is_float ? INFINITY : 1.0) : spec->clip_level;
+  d.exposure = exposure;
+  return d;
+}
+
+static cf_status read_mask(const cf_capture *capture, size_t k, const cf_image *image,
+                           cf_image *mask, cf_error *err) {
+  const char *path = capture->spec.mask_paths[k];
+  cf_status s = cf_image_read(path, mask, NULL, err);
+  if (s == CF_OK && (mask->width != image->width || mask->height != image->height))
+    s = cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d", path,
+                     mask->width, mask->height, capture->spec.image_paths[k], image->width,
+                     image->height);
+  return s;
+}
+
+/* Read image k (and its mask) and add its observations. */
+static cf_status load_image(cf_capture *capture, size_t k, cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  cf_image image = {0}, mask = {0};
+  cf_image_info info;
+  cf_status s = cf_image_read(spec->image_paths[k], &image, &info, err);
+  if (s == CF_OK) s = cf_image_check_finite(&image, spec->image_paths[k], err);
+  if (s == CF_OK) s = capture_check_size(capture, k, &image, err);
+  if (s == CF_OK && spec->mask_paths) s = read_mask(capture, k, &image, &mask, err);
+  if (s == CF_OK && capture->normal_map.pixels &&
+      (capture->normal_map.width != image.width || capture->normal_map.height != image.height))
+    s = cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
+                     spec->normal_map, capture->normal_map.width, capture->normal_map.height,
+                     spec->image_paths[k], image.width, image.height);
+  double exposure = 1.0;
+  if (s == CF_OK) s = capture_raw_exposure(capture, k, &info, &exposure, err);
+  if (s == CF_OK) {
+    capture->raw_exposures[k] = exposure;
+    capture->images[k].exposure = exposure;
+    cf_decode decode = image_decode(capture, &info, exposure);
+    s = capture_add_observations(capture, k, &image, mask.pixels ? &mask : NULL, &decode, err);
+  }
+  cf_image_free(&image);
+  cf_image_free(&mask);
+  return s;
+}
+
+/* colour.exposure "exif": the exposures' reference is their geometric mean
+ * (MODEL.md: fix the reference, or exposures trade with ρ and F0). The
+ * radiances were divided by the raw exposures; rescale them. */
+static void normalise_exif_exposures(cf_capture *capture) {
+  size_t n = capture->spec.num_images;
+  double log_sum = 0.0;
+  for (size_t k = 0; k < n; ++k) log_sum += log(capture->raw_exposures[k]);
+  double reference = exp(log_sum / (double)n);
+  for (size_t k = 0; k < n; ++k)
+    capture->images[k].exposure = capture->raw_exposures[k] / reference;
+  for (size_t i = 0; i < 3 * capture->obs.count; ++i) capture->obs.rgb[i] *= reference;
+}
+
+static cf_status check_sphere_seen(cf_capture *capture, cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  for (size_t k = 0; k < spec->num_images; ++k)
+    if (capture->images[k].sphere_pixels == 0)
+      capture_warn(capture, "%s: no pixel of this image sees the sphere", spec->image_paths[k]);
+  if (capture->obs.count > 0) return CF_OK;
+  if (spec->camera == CF_CAMERA_KIND_COLMAP)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: geometry: the sphere (centre %g %g %g, radius %g) is seen by none "
+                        "of the %zu cameras (clear of its silhouette and inside the masks)",
+                        spec->path, capture->center[0], capture->center[1], capture->center[2],
+                        capture->radius, spec->num_images);
+  return cf_error_set(err, CF_EINVAL,
+                      "%s: geometry: no pixel of the %zu images sees the sphere clear of its "
+                      "silhouette and inside the masks",
+                      spec->path, spec->num_images);
+}
+
+static cf_status load(cf_capture *capture, const char *path, const cf_capture_options *options,
+                      cf_error *err) {
+  cf_status s = cf_capture_spec_read(path, &capture->spec, err);
+  if (s != CF_OK) return s;
+  size_t n = capture->spec.num_images;
+  capture->views = calloc(n, sizeof *capture->views);
+  capture->images = calloc(n, sizeof *capture->images);
+  capture->raw_exposures = calloc(n, sizeof *capture->raw_exposures);
+  if (!capture->views || !capture->images || !capture->raw_exposures)
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
+  if ((s = capture_load_views(capture, err)) != CF_OK) return s;
+  if ((s = capture_load_surface(capture, options, err)) != CF_OK) return s;
+  if ((s = capture_load_lights(capture, err)) != CF_OK) return s;
+  capture->obs.lights = capture->max_lights;
+  for (size_t k = 0; k < n; ++k) {
+    if (options && options->progress)
+      options->progress(options->progress_user, "reading images", k, n);
+    if ((s = load_image(capture, k, err)) != CF_OK) return s;
+  }
+  if (options && options->progress)
+    options->progress(options->progress_user, "reading images", n, n);
+  if (capture->spec.exposure == CF_EXPOSURE_EXIF) normalise_exif_exposures(capture);
+  return check_sphere_seen(capture, err);
+}
+
+cf_status cf_capture_load(const char *path, const cf_capture_options *options, cf_capture **capture,
+                          cf_error *err) {
+  *capture = calloc(1, sizeof **capture);
+  if (!*capture) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_status s = load(*capture, path, options, err);
+  if (s != CF_OK) {
+    cf_capture_free(*capture);
+    *capture = NULL;
+  }
+  return s;
+}
+
+void cf_capture_free(cf_capture *capture) {
+  if (!capture) return;
+  cf_observations *o = &capture->obs;
+  free(o->normal);
+  free(o->view);
+  free(o->light_dir);
+  free(o->irradiance);
+  free(o->rgb);
+  free(o->flags);
+  free(o->image);
+  free(o->pixel);
+  for (size_t i = 0; i < capture->num_warnings; ++i) free(capture->warnings[i]);
+  free(capture->warnings);
+  free(capture->views);
+  free(capture->images);
+  free(capture->raw_exposures);
+  free(capture->lights);
+  free(capture->light_counts);
+  cf_image_free(&capture->normal_map);
+  free(capture->map_class);
+  cf_colmap_model_free(&capture->colmap);
+  cf_capture_spec_free(&capture->spec);
+  free(capture);
+}
+
+const cf_observations *cf_capture_observations(const cf_capture *capture) {
+  return &capture->obs;
+}
+
+size_t cf_capture_image_count(const cf_capture *capture) {
+  return capture->spec.num_images;
+}
+
+const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index) {
+  return index < capture->spec.num_images ? &capture->images[index] : NULL;
+}
+
+const char *cf_capture_warning(const cf_capture *capture, size_t index) {
+  return index < capture->num_warnings ? capture->warnings[index] : NULL;
+}
+
+void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary) {
+  static const char *const geometries[] = {"sphere", "sphere_from_silhouettes", "normal_map"};
+  const cf_capture_spec *spec = &capture->spec;
+  memset(summary, 0, sizeof *summary);
+  summary->name = spec->name;
+  summary->camera = spec->camera == CF_CAMERA_KIND_COLMAP ? "colmap" : "orthographic";
+  summary->geometry = geometries[spec->geometry];
+  memcpy(summary->sphere_center, capture->center, sizeof capture->center);
+  summary->sphere_radius = capture->radius;
+  summary->sphere_rms_px = capture->rms_px;
+  summary->silhouette_kept = capture->silhouette_kept;
+  summary->radiometry_relative = spec->radiometry_relative;
+  summary->tone_curve_unknown = spec->tone_curve_unknown;
+  summary->has_noise = spec->has_noise;
+  summary->noise_read = spec->noise_read;
+  summary->noise_shot = spec->noise_shot;
+  summary->warnings = capture->num_warnings;
+}

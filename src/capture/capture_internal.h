@@ -1,0 +1,98 @@
+/* The loaded capture (include/clayfit/capture.h), shared by the files that
+ * build it: capture.c (orchestration), capture_views.c (cameras and
+ * exposures), capture_lights.c, capture_surface.c (the sphere's surface)
+ * and observations.c (the pixel loop). Private to src/capture. */
+#ifndef CLAYFIT_CAPTURE_INTERNAL_H
+#define CLAYFIT_CAPTURE_INTERNAL_H
+
+#include "capture_spec.h"
+#include "clayfit/capture.h"
+#include "clayfit/colmap.h"
+#include "clayfit/image.h"
+#include "lights.h"
+#include "sphere_silhouette.h"
+
+/* One image's camera. */
+typedef struct capture_view {
+  const cf_camera *camera; /* COLMAP's (NULL for the orthographic camera) */
+  double r[9];             /* world-to-camera rotation, row-major */
+  double t[3];             /* world-to-camera translation */
+  double c[3];             /* camera centre, world */
+  double focal_px;         /* mean focal length, pixels (margins, reports) */
+} capture_view;
+
+struct cf_capture {
+  cf_capture_spec spec;
+  cf_colmap_model colmap;
+  capture_view *views;      /* one per image */
+  cf_capture_image *images; /* one per image */
+  double *raw_exposures;    /* e_k before normalisation (exif) */
+
+  /* lights: image k has light_counts[k] lights at lights[k * max_lights] */
+  cf_light *lights;
+  int *light_counts;
+  int max_lights;
+
+  /* the sphere's surface */
+  double center[3], radius; /* COLMAP cameras */
+  double rms_px;            /* of the triangulation, over the kept points */
+  double silhouette_kept;   /* fraction of outline points kept */
+  cf_ellipse circle;        /* orthographic + silhouettes */
+  cf_image normal_map;      /* orthographic + normal map, normalised */
+  uint8_t *map_class;       /* its pixels: a surface_hit each */
+
+  cf_observations obs;
+  size_t obs_capacity;
+
+  char **warnings;
+  size_t num_warnings;
+};
+
+/* Add a warning (printf-style). Out of memory loses the warning only. */
+void capture_warn(cf_capture *capture, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* capture_views.c: read the COLMAP model and match every image to it (or
+ * set up the orthographic camera); fill views and images' names, paths. */
+cf_status capture_load_views(cf_capture *capture, cf_error *err);
+
+/* capture_views.c: check an image's size against its camera (and, for the
+ * orthographic camera, against the first image's). */
+cf_status capture_check_size(cf_capture *capture, size_t k, const cf_image *image, cf_error *err);
+
+/* capture_views.c: the exposure e_k of image k from the spec or EXIF
+ * (before normalisation). */
+cf_status capture_raw_exposure(const cf_capture *capture, size_t k, const cf_image_info *info,
+                               double *exposure, cf_error *err);
+
+/* capture_lights.c: every image's lights (needs the sphere's radius for
+ * flash offsets given in metres). */
+cf_status capture_load_lights(cf_capture *capture, cf_error *err);
+
+/* capture_surface.c: the sphere (given, or triangulated from silhouettes),
+ * or the orthographic circle, or the normal map. */
+cf_status capture_load_surface(cf_capture *capture, const cf_capture_options *options,
+                               cf_error *err);
+
+/* capture_surface.c: what pixel (x, y) of image k sees of the sphere. */
+typedef enum surface_hit { SURFACE_MISS, SURFACE_MARGIN, SURFACE_HIT } surface_hit;
+typedef struct surface_point {
+  double position[3]; /* world (COLMAP cameras; 0 for orthographic) */
+  double normal[3], view[3];
+} surface_point;
+surface_hit capture_surface_at(const cf_capture *capture, size_t k, int x, int y,
+                               surface_point *point);
+
+/* capture_surface.c: the pixel rectangle [x0, x1) × [y0, y1) of image k
+ * that can see the sphere. */
+void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int height,
+                            int bounds[4]);
+
+/* observations.c: decode image k and append its observations. */
+cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
+                                   const cf_image *mask, const cf_decode *decode, cf_error *err);
+
+#endif /* CLAYFIT_CAPTURE_INTERNAL_H */

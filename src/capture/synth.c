@@ -1,0 +1,395 @@
+/* Synthetic captures (include/clayfit/synth.h): orbit cameras, the scene
+ * rendered by MODEL.md's image formation with S×S samples per pixel near
+ * and on the sphere, photon and read noise, and everything a real capture
+ * would have: images, a COLMAP model, a capture file (plus the truth). */
+#include "clayfit/synth.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clayfit/colmap.h"
+#include "clayfit/image.h"
+#include "core/file.h"
+#include "core/rng.h"
+#include "synth_scene.h"
+
+#define SYNTH_PI 3.14159265358979323846
+
+void cf_synth_default_options(cf_synth_options *o) {
+  memset(o, 0, sizeof *o);
+  o->model = CF_MODEL_CLAY;
+  cf_model_default_params(o->model, o->params);
+  o->images = 16;
+  o->width = 640;
+  o->height = 480;
+  o->focal_px = 1.2 * 640;
+  o->distance = 5.0;
+  o->flash_offset[0] = 0.3;  /* right */
+  o->flash_offset[1] = -0.3; /* up (camera y points down) */
+  o->read_noise = 0.002;
+  o->shot_noise = 0.0005;
+  o->supersample = 3;
+  o->format = CF_SYNTH_PNG8;
+  o->seed = 1;
+  o->sphere_radius_m = 0.04;
+}
+
+/* ---- cameras ---- */
+
+typedef struct synth_camera {
+  double r[9], t[3], c[3]; /* world-to-camera rotation, translation; centre */
+  double q[4];             /* r as a quaternion (qw, qx, qy, qz) */
+} synth_camera;
+
+/* A rotation matrix as a unit quaternion (Shepperd's method). */
+static void matrix_to_quaternion(const double r[9], double q[4]) {
+  double trace = r[0] + r[4] + r[8];
+  if (trace > 0.0) {
+    double s = 2.0 * sqrt(1.0 + trace);
+    q[0] = 0.25 * s;
+    q[1] = (r[7] - r[5]) / s;
+    q[2] = (r[2] - r[6]) / s;
+    q[3] = (r[3] - r[1]) / s;
+  } else if (r[0] > r[4] && r[0] > r[8]) {
+    double s = 2.0 * sqrt(1.0 + r[0] - r[4] - r[8]);
+    q[0] = (r[7] - r[5]) / s;
+    q[1] = 0.25 * s;
+    q[2] = (r[1] + r[3]) / s;
+    q[3] = (r[2] + r[6]) / s;
+  } else if (r[4] > r[8]) {
+    double s = 2.0 * sqrt(1.0 + r[4] - r[0] - r[8]);
+    q[0] = (r[2] - r[6]) / s;
+    q[1] = (r[1] + r[3]) / s;
+    q[2] = 0.25 * s;
+    q[3] = (r[5] + r[7]) / s;
+  } else {
+    double s = 2.0 * sqrt(1.0 + r[8] - r[0] - r[4]);
+    q[0] = (r[3] - r[1]) / s;
+    q[1] = (r[2] + r[6]) / s;
+    q[2] = (r[5] + r[7]) / s;
+    q[3] = 0.25 * s;
+  }
+  if (q[0] < 0.0)
+    for (int k = 0; k < 4; ++k) q[k] = -q[k];
+}
+
+/* Camera k of the orbit: two rings (20 and 35 degrees of elevation,
+ * alternating), evenly spaced in azimuth, looking at the sphere's centre.
+ * COLMAP's axes: x right, y down, z forward. */
+static void orbit_camera(const cf_synth_options *o, int k, synth_camera *cam) {
+  double azimuth = 2.0 * SYNTH_PI * k / o->images;
+  double elevation = (k % 2 ? 35.0 : 20.0) * SYNTH_PI / 180.0;
+  double c[3] = {o->distance * cos(elevation) * cos(azimuth),
+                 o->distance * cos(elevation) * sin(azimuth), o->distance * sin(elevation)};
+  double forward[3] = {-c[0] / o->distance, -c[1] / o->distance, -c[2] / o->distance};
+  /* right = forward × up, down = forward × right */
+  double right[3] = {forward[1], -forward[0], 0.0};
+  double length = sqrt(right[0] * right[0] + right[1] * right[1]);
+  for (int i = 0; i < 3; ++i) right[i] /= length;
+  double down[3] = {forward[1] * right[2] - forward[2] * right[1],
+                    forward[2] * right[0] - forward[0] * right[2],
+                    forward[0] * right[1] - forward[1] * right[0]};
+  for (int i = 0; i < 3; ++i) {
+    cam->r[i] = right[i];
+    cam->r[3 + i] = down[i];
+    cam->r[6 + i] = forward[i];
+    cam->c[i] = c[i];
+  }
+  for (int i = 0; i < 3; ++i)
+    cam->t[i] = -(cam->r[3 * i] * c[0] + cam->r[3 * i + 1] * c[1] + cam->r[3 * i + 2] * c[2]);
+  matrix_to_quaternion(cam->r, cam->q);
+}
+
+static cf_camera pinhole(const cf_synth_options *o) {
+  cf_camera camera = {1, CF_CAMERA_PINHOLE, (uint64_t)o->width, (uint64_t)o->height, 4, {0}};
+  camera.params[0] = camera.params[1] = o->focal_px;
+  camera.params[2] = 0.5 * o->width;
+  camera.params[3] = 0.5 * o->height;
+  return camera;
+}
+
+/* ---- rendering ---- */
+
+typedef struct render_job {
+  const cf_synth_options *options;
+  const char *dir;
+  cf_camera camera;
+  synth_camera *cameras;
+  double intensity;
+  pthread_mutex_t lock;
+  int next, done;
+  cf_status status;
+  cf_error error;
+} render_job;
+
+static const char *extension(cf_synth_format format) {
+  return format == CF_SYNTH_EXR ? "exr" : "png";
+}
+
+/* The radiance of pixel (x, y): S×S samples on a centred grid where the
+ * pixel is within 2 pixels of the sphere's silhouette or inside it, one
+ * sample elsewhere (the background is never fitted). *covered is the
+ * fraction of samples that hit the sphere. */
+static void render_pixel(const render_job *job, const synth_scene *scene, const synth_camera *cam,
+                         int x, int y, double radiance[3], double *covered) {
+  const cf_synth_options *o = job->options;
+  double centre[2] = {x + 0.5, y + 0.5}, ray[3], d[3];
+  cf_camera_unproject(&job->camera, centre, ray);
+  for (int k = 0; k < 3; ++k)
+    d[k] = cam->r[k] * ray[0] + cam->r[3 + k] * ray[1] + cam->r[6 + k] * ray[2];
+  /* angular distance of the centre ray from the silhouette, in pixels */
+  double to_centre = sqrt(cam->c[0] * cam->c[0] + cam->c[1] * cam->c[1] + cam->c[2] * cam->c[2]);
+  double cos_ray = -(d[0] * cam->c[0] + d[1] * cam->c[1] + d[2] * cam->c[2]) / to_centre;
+  double outside_px = (acos(fmin(1.0, cos_ray)) - asin(1.0 / to_centre)) * o->focal_px;
+  int s = outside_px > 2.0 ? 1 : o->supersample;
+  double sum[3] = {0.0, 0.0, 0.0};
+  int hits = 0;
+  for (int j = 0; j < s; ++j) {
+    for (int i = 0; i < s; ++i) {
+      double uv[2] = {x + (i + 0.5) / s, y + (j + 0.5) / s}, sample[3];
+      cf_camera_unproject(&job->camera, uv, ray);
+      for (int k = 0; k < 3; ++k)
+        d[k] = cam->r[k] * ray[0] + cam->r[3 + k] * ray[1] + cam->r[6 + k] * ray[2];
+      hits += synth_shade(scene, cam->c, d, sample) == SYNTH_SPHERE;
+      for (int c = 0; c < 3; ++c) sum[c] += sample[c];
+    }
+  }
+  for (int c = 0; c < 3; ++c) radiance[c] = sum[c] / (s * s);
+  *covered = (double)hits / (s * s);
+}
+
+/* A normal deviate (Box-Muller). */
+static double gaussian(cf_rng *rng) {
+  double u1 = cf_rng_uniform(rng), u2 = cf_rng_uniform(rng);
+  return sqrt(-2.0 * log(1.0 - u1)) * cos(2.0 * SYNTH_PI * u2);
+}
+
+/* Photon and read noise, then what the file stores. */
+static float stored_value(const cf_synth_options *o, double radiance, cf_rng *rng) {
+  double variance = o->shot_noise * fmax(radiance, 0.0) + o->read_noise * o->read_noise;
+  double noisy = radiance + (variance > 0.0 ? sqrt(variance) * gaussian(rng) : 0.0);
+  switch (o->format) {
+    case CF_SYNTH_PNG8:
+      return (float)cf_linear_to_srgb(fmin(1.0, fmax(0.0, noisy)));
+    case CF_SYNTH_PNG16:
+      return (float)fmin(1.0, fmax(0.0, noisy));
+    case CF_SYNTH_EXR:
+      return (float)noisy;
+  }
+  return 0.0f;
+}
+
+static cf_status render_image(render_job *job, int k, cf_error *err) {
+  const cf_synth_options *o = job->options;
+  synth_camera *cam = &job->cameras[k];
+  synth_scene scene = {o->model, o->params, {0.0, 0.0, 0.0}, job->intensity, o->seed};
+  for (int i = 0; i < 3; ++i) /* the flash: C + Rᵀ t_flash */
+    scene.light[i] = cam->c[i] + cam->r[i] * o->flash_offset[0] +
+                     cam->r[3 + i] * o->flash_offset[1] + cam->r[6 + i] * o->flash_offset[2];
+  cf_image image = {0}, mask = {0};
+  cf_status s = cf_image_alloc(&image, o->width, o->height, 3, err);
+  if (s == CF_OK && o->write_masks) s = cf_image_alloc(&mask, o->width, o->height, 1, err);
+  cf_rng rng = cf_rng_seed(o->seed * 1000003u + (uint64_t)k);
+  for (int y = 0; s == CF_OK && y < o->height; ++y) {
+    for (int x = 0; x < o->width; ++x) {
+      double radiance[3], covered;
+      render_pixel(job, &scene, cam, x, y, radiance, &covered);
+      float *pixel = image.pixels + 3 * ((size_t)y * (size_t)o->width + (size_t)x);
+      for (int c = 0; c < 3; ++c) pixel[c] = stored_value(o, radiance[c], &rng);
+      if (mask.pixels) mask.pixels[(size_t)y * (size_t)o->width + (size_t)x] = covered == 1.0;
+    }
+  }
+  char name[64], path[4096];
+  snprintf(name, sizeof name, "images/%03d.%s", k, extension(o->format));
+  if (s == CF_OK) s = cf_path_join(job->dir, name, path, sizeof path, err);
+  int bits = o->format == CF_SYNTH_PNG8 ? 8 : o->format == CF_SYNTH_PNG16 ? 16 : 32;
+  if (s == CF_OK) s = cf_image_write(path, &image, bits, err);
+  /* a mask has its image's file name (the capture format looks it up so) */
+  snprintf(name, sizeof name, "masks/%03d.%s", k, extension(o->format));
+  if (s == CF_OK && mask.pixels) s = cf_path_join(job->dir, name, path, sizeof path, err);
+  if (s == CF_OK && mask.pixels)
+    s = cf_image_write(path, &mask, o->format == CF_SYNTH_EXR ? 16 : 8, err);
+  cf_image_free(&image);
+  cf_image_free(&mask);
+  return s;
+}
+
+static void *render_worker(void *arg) {
+  render_job *job = arg;
+  for (;;) {
+    pthread_mutex_lock(&job->lock);
+    int k = job->status == CF_OK && job->next < job->options->images ? job->next++ : -1;
+    pthread_mutex_unlock(&job->lock);
+    if (k < 0) return NULL;
+    cf_error err = {0};
+    cf_status s = render_image(job, k, &err);
+    pthread_mutex_lock(&job->lock);
+    if (s != CF_OK && job->status == CF_OK) {
+      job->status = s;
+      job->error = err;
+    }
+    ++job->done;
+    if (job->options->progress)
+      job->options->progress(job->options->progress_user, "rendering images", (size_t)job->done,
+                             (size_t)job->options->images);
+    pthread_mutex_unlock(&job->lock);
+  }
+}
+
+/* ---- the files around the images ---- */
+
+static cf_status write_colmap(const char *dir, const render_job *job, cf_error *err) {
+  const cf_synth_options *o = job->options;
+  char path[4096];
+  cf_status s = cf_path_join(dir, "sparse/0", path, sizeof path, err);
+  if (s == CF_OK) s = cf_make_dirs(path, err);
+  if (s != CF_OK) return s;
+  cf_colmap_image *images = calloc((size_t)o->images, sizeof *images);
+  char(*names)[32] = calloc((size_t)o->images, sizeof *names);
+  cf_camera camera = job->camera;
+  if (!images || !names) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (int k = 0; s == CF_OK && k < o->images; ++k) {
+    snprintf(names[k], sizeof names[k], "%03d.%s", k, extension(o->format));
+    images[k].image_id = (uint32_t)k + 1;
+    memcpy(images[k].qvec, job->cameras[k].q, sizeof images[k].qvec);
+    memcpy(images[k].tvec, job->cameras[k].t, sizeof images[k].tvec);
+    images[k].camera_id = camera.camera_id;
+    images[k].name = names[k];
+  }
+  cf_colmap_model model = {1, &camera, (size_t)o->images, images, 0, NULL};
+  if (s == CF_OK) s = cf_colmap_write_text(path, &model, err);
+  free(images);
+  free(names);
+  return s;
+}
+
+static json_t *rgb_json(double r, double g, double b) {
+  return json_pack("[f, f, f]", r, g, b);
+}
+
+static cf_status write_json(const char *dir, const char *name, json_t *doc, cf_error *err) {
+  char path[4096];
+  cf_status s = cf_path_join(dir, name, path, sizeof path, err);
+  if (s == CF_OK && json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0)
+    s = cf_error_set(err, CF_EIO, "%s: could not write", path);
+  json_decref(doc);
+  return s;
+}
+
+static cf_status write_capture_file(const char *dir, const render_job *job, cf_error *err) {
+  const cf_synth_options *o = job->options;
+  const cf_model_info *m = cf_model_info_get(o->model);
+  json_t *files = json_array();
+  for (int k = 0; k < o->images; ++k) {
+    char name[32];
+    snprintf(name, sizeof name, "%03d.%s", k, extension(o->format));
+    json_array_append_new(files, json_string(name));
+  }
+  json_t *images = json_pack("{s:s, s:o}", "directory", "images", "files", files);
+  if (o->write_masks) json_object_set_new(images, "masks", json_string("masks"));
+  json_t *geometry =
+      o->silhouette_geometry
+          ? json_pack("{s:s, s:f}", "type", "sphere_from_silhouettes", "margin_px", 2.0)
+          : json_pack("{s:s, s:[f, f, f], s:f, s:f}", "type", "sphere", "center", 0.0, 0.0, 0.0,
+                      "radius", 1.0, "margin_px", 2.0);
+  json_t *flash = json_pack("{s:s, s:[f, f, f], s:o}", "type", "flash", "offset",
+                            o->flash_offset[0], o->flash_offset[1], o->flash_offset[2], "intensity",
+                            rgb_json(job->intensity, job->intensity, job->intensity));
+  char name[128];
+  snprintf(name, sizeof name, "synthetic %s (%s), %d images", m->name, m->code, o->images);
+  json_t *doc = json_pack(
+      "{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:{s:f, s:f}, s:o, s:{s:f}, s:[o]}",
+      "clayfit_capture", 1, "name", name, "camera", "type", "colmap", "model", "sparse/0", "images",
+      images, "colour", "encoding", o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry",
+      "absolute", "noise", "read", o->read_noise, "shot", o->shot_noise, "geometry", geometry,
+      "scale", "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+  return write_json(dir, "capture.json", doc, err);
+}
+
+static cf_status write_truth(const char *dir, const render_job *job, cf_error *err) {
+  const cf_synth_options *o = job->options;
+  const cf_model_info *m = cf_model_info_get(o->model);
+  json_t *params = json_object();
+  for (int j = 0; j < m->param_count; ++j) {
+    const cf_param_info *p = cf_param_info_get(m->params[j]);
+    const double *x = o->params + m->offsets[j];
+    json_object_set_new(params, p->name,
+                        p->components == 3 ? rgb_json(x[0], x[1], x[2]) : json_real(x[0]));
+  }
+  static const char *const formats[] = {"png8", "png16", "exr"};
+  json_t *doc = json_pack(
+      "{s:s, s:s, s:o, s:{s:[f, f, f], s:f}, s:{s:[f, f, f], s:f}, s:f, s:i, s:s, s:{s:f, "
+      "s:f}, s:I, s:i, s:i, s:f, s:f}",
+      "model", m->name, "code", m->code, "params", params, "sphere", "center", 0.0, 0.0, 0.0,
+      "radius", 1.0, "flash", "offset", o->flash_offset[0], o->flash_offset[1], o->flash_offset[2],
+      "intensity", job->intensity, "exposure", 1.0, "supersample", o->supersample, "format",
+      formats[o->format], "noise", "read", o->read_noise, "shot", o->shot_noise, "seed",
+      (json_int_t)o->seed, "width", o->width, "height", o->height, "focal_px", o->focal_px,
+      "distance", o->distance);
+  return write_json(dir, "truth.json", doc, err);
+}
+
+static cf_status check_options(const cf_synth_options *o, cf_error *err) {
+  cf_status s = cf_params_check(o->model, o->params, err);
+  if (s != CF_OK) return s;
+  if (o->images < 1 || o->images > 10000)
+    return cf_error_set(err, CF_ERANGE, "images: %d is outside [1, 10000]", o->images);
+  if (o->width < 16 || o->height < 16 || o->width > 16384 || o->height > 16384)
+    return cf_error_set(err, CF_ERANGE, "image size %d x %d is outside [16, 16384]", o->width,
+                        o->height);
+  if (!(o->focal_px > 0.0) || !(o->distance > 1.5) || o->distance > 5.5)
+    return cf_error_set(err, CF_ERANGE,
+                        "focal length %g must be > 0 and the distance %g in (1.5, 5.5] (inside "
+                        "the backdrop)",
+                        o->focal_px, o->distance);
+  if (o->supersample < 1 || o->supersample > 16)
+    return cf_error_set(err, CF_ERANGE, "supersample: %d is outside [1, 16]", o->supersample);
+  if (!(o->read_noise >= 0.0) || !(o->shot_noise >= 0.0) || !(o->flash_intensity >= 0.0) ||
+      !isfinite(o->read_noise + o->shot_noise + o->flash_intensity))
+    return cf_error_set(err, CF_ERANGE, "noise and flash intensity must be finite and >= 0");
+  return CF_OK;
+}
+
+cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *err) {
+  cf_status s = check_options(o, err);
+  if (s != CF_OK) return s;
+  char path[4096];
+  const char *folders[] = {"images", o->write_masks ? "masks" : NULL};
+  for (int i = 0; s == CF_OK && i < 2; ++i)
+    if (folders[i] && (s = cf_path_join(dir, folders[i], path, sizeof path, err)) == CF_OK)
+      s = cf_make_dirs(path, err);
+  if (s != CF_OK) return s;
+
+  render_job job;
+  memset(&job, 0, sizeof job);
+  job.options = o;
+  job.dir = dir;
+  job.camera = pinhole(o);
+  /* a white Lambert surface facing the flash at the orbit's distance has
+   * radiance 0.5: I/(π D²) = 0.5 */
+  job.intensity =
+      o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * SYNTH_PI * o->distance * o->distance;
+  job.cameras = calloc((size_t)o->images, sizeof *job.cameras);
+  if (!job.cameras) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (int k = 0; k < o->images; ++k) orbit_camera(o, k, &job.cameras[k]);
+  pthread_mutex_init(&job.lock, NULL);
+  enum { THREADS = 2 };
+  pthread_t threads[THREADS];
+  int started = 0;
+  for (; started < THREADS; ++started)
+    if (pthread_create(&threads[started], NULL, render_worker, &job) != 0) break;
+  if (started == 0) render_worker(&job);
+  for (int i = 0; i < started; ++i) pthread_join(threads[i], NULL);
+  pthread_mutex_destroy(&job.lock);
+  s = job.status;
+  if (s != CF_OK && err) *err = job.error;
+  if (s == CF_OK) s = write_colmap(dir, &job, err);
+  if (s == CF_OK) s = write_capture_file(dir, &job, err);
+  if (s == CF_OK) s = write_truth(dir, &job, err);
+  free(job.cameras);
+  return s;
+}

@@ -1,0 +1,144 @@
+/* The synthetic scene: intersections, procedural textures and shading
+ * (synth_scene.h). */
+#include "synth_scene.h"
+
+#include <math.h>
+
+static const double ground_z = -1.0;
+static const double backdrop_radius = 6.0, backdrop_top = 5.0;
+
+static double dot3(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+double synth_hit_sphere(const double origin[3], const double d[3]) {
+  double b = dot3(d, origin), c = dot3(origin, origin) - 1.0;
+  double discriminant = b * b - c;
+  if (discriminant < 0.0 || c <= 0.0) return -1.0;
+  return -b - sqrt(discriminant);
+}
+
+/* ---- textures: value noise on an integer lattice (hash per corner,
+ * smoothstep interpolation), several octaves, plus sharp blotches, so that
+ * SIFT finds corners at every scale of the orbit ---- */
+
+static uint64_t hash3(int64_t x, int64_t y, uint64_t seed) {
+  uint64_t h = seed ^ ((uint64_t)x * 0x9e3779b97f4a7c15ULL) ^ ((uint64_t)y * 0xc2b2ae3d27d4eb4fULL);
+  h ^= h >> 33;
+  h *= 0xff51afd7ed558ccdULL;
+  h ^= h >> 33;
+  h *= 0xc4ceb9fe1a85ec53ULL;
+  return h ^ (h >> 33);
+}
+
+static double lattice(int64_t x, int64_t y, uint64_t seed) {
+  return (double)(hash3(x, y, seed) >> 11) * 0x1.0p-53;
+}
+
+static double value_noise(double x, double y, uint64_t seed) {
+  double fx = floor(x), fy = floor(y);
+  int64_t ix = (int64_t)fx, iy = (int64_t)fy;
+  double tx = x - fx, ty = y - fy;
+  tx = tx * tx * (3.0 - 2.0 * tx);
+  ty = ty * ty * (3.0 - 2.0 * ty);
+  double a = lattice(ix, iy, seed), b = lattice(ix + 1, iy, seed);
+  double c = lattice(ix, iy + 1, seed), e = lattice(ix + 1, iy + 1, seed);
+  return (a + (b - a) * tx) + ((c + (e - c) * tx) - (a + (b - a) * tx)) * ty;
+}
+
+/* Albedo in [0.08, 0.9] per channel at texture coordinates (s, t): smooth
+ * noise plus crisp blotches at three scales (a factor 2.7 apart), so that
+ * SIFT finds corners and blobs at every scale the orbit sees. */
+static void texture(double s, double t, uint64_t seed, double albedo[3]) {
+  double smooth = 0.0, amplitude = 0.5, frequency = 1.0;
+  for (int octave = 0; octave < 4; ++octave) {
+    smooth += amplitude * value_noise(s * frequency, t * frequency, seed + (uint64_t)octave);
+    amplitude *= 0.5;
+    frequency *= 2.3;
+  }
+  double blotches = 0.0;
+  for (int scale = 0; scale < 3; ++scale) {
+    double f = 0.9 * pow(2.7, scale);
+    blotches += value_noise(s * f, t * f, seed + 17 + (uint64_t)scale) > 0.58 ? 1.0 / 3.0 : 0.0;
+  }
+  double grey = 0.08 + 0.82 * fmin(1.0, fmax(0.0, 0.45 * smooth + 0.75 * blotches));
+  for (int c = 0; c < 3; ++c)
+    albedo[c] = grey * (0.8 + 0.2 * value_noise(s * 0.7, t * 0.7, seed + 31 + (uint64_t)c));
+}
+
+/* Is the segment from x to the light blocked by the sphere? */
+static int in_shadow(const double x[3], const double light[3]) {
+  double d[3] = {light[0] - x[0], light[1] - x[1], light[2] - x[2]};
+  double length = sqrt(dot3(d, d));
+  for (int k = 0; k < 3; ++k) d[k] /= length;
+  double t = synth_hit_sphere(x, d);
+  return t > 1e-9 && t < length;
+}
+
+/* Lambertian radiance at x with normal n and albedo. */
+static void lambert(const synth_scene *scene, const double x[3], const double n[3],
+                    const double albedo[3], double radiance[3]) {
+  double l[3] = {scene->light[0] - x[0], scene->light[1] - x[1], scene->light[2] - x[2]};
+  double d2 = dot3(l, l), cos_i = dot3(l, n) / sqrt(d2);
+  double e = cos_i > 0.0 && !in_shadow(x, scene->light) ? scene->intensity / d2 * cos_i : 0.0;
+  for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / 3.14159265358979323846 * e;
+}
+
+static void shade_sphere(const synth_scene *scene, const double x[3], const double v[3],
+                         double radiance[3]) {
+  double l[3] = {scene->light[0] - x[0], scene->light[1] - x[1], scene->light[2] - x[2]};
+  double d2 = dot3(l, l), inv = 1.0 / sqrt(d2);
+  for (int k = 0; k < 3; ++k) l[k] *= inv;
+  const double *n = x; /* unit sphere at the origin */
+  double cos_i = dot3(n, l), f[3];
+  cf_eval(scene->model, scene->params, n, l, v, f, NULL);
+  double e = scene->intensity / d2;
+  for (int c = 0; c < 3; ++c) radiance[c] = cos_i > 0.0 ? f[c] * e * cos_i : 0.0;
+}
+
+synth_surface synth_shade(const synth_scene *scene, const double origin[3], const double d[3],
+                          double radiance[3]) {
+  radiance[0] = radiance[1] = radiance[2] = 0.0;
+  double t_sphere = synth_hit_sphere(origin, d);
+  /* the ground plane */
+  double t_ground = d[2] < 0.0 ? (ground_z - origin[2]) / d[2] : -1.0;
+  /* the backdrop: |(o + t d)_xy| = R, the far root (we are inside) */
+  double a = d[0] * d[0] + d[1] * d[1], b = origin[0] * d[0] + origin[1] * d[1];
+  double c = origin[0] * origin[0] + origin[1] * origin[1] - backdrop_radius * backdrop_radius;
+  double t_backdrop = a > 0.0 ? (-b + sqrt(fmax(0.0, b * b - a * c))) / a : -1.0;
+
+  double best = INFINITY;
+  synth_surface hit = SYNTH_NOTHING;
+  if (t_sphere > 0.0 && t_sphere < best) best = t_sphere, hit = SYNTH_SPHERE;
+  if (t_ground > 0.0 && t_ground < best) {
+    double x = origin[0] + t_ground * d[0], y = origin[1] + t_ground * d[1];
+    if (x * x + y * y < backdrop_radius * backdrop_radius) best = t_ground, hit = SYNTH_GROUND;
+  }
+  if (t_backdrop > 0.0 && t_backdrop < best && origin[2] + t_backdrop * d[2] <= backdrop_top)
+    best = t_backdrop, hit = SYNTH_BACKDROP;
+
+  double x[3] = {origin[0] + best * d[0], origin[1] + best * d[1], origin[2] + best * d[2]};
+  double albedo[3];
+  switch (hit) {
+    case SYNTH_SPHERE: {
+      double v[3] = {-d[0], -d[1], -d[2]};
+      shade_sphere(scene, x, v, radiance);
+      break;
+    }
+    case SYNTH_GROUND: {
+      static const double up[3] = {0.0, 0.0, 1.0};
+      texture(6.0 * x[0], 6.0 * x[1], scene->seed, albedo);
+      lambert(scene, x, up, albedo, radiance);
+      break;
+    }
+    case SYNTH_BACKDROP: {
+      double inward[3] = {-x[0] / backdrop_radius, -x[1] / backdrop_radius, 0.0};
+      texture(4.0 * backdrop_radius * atan2(x[1], x[0]), 4.0 * x[2], scene->seed + 1000, albedo);
+      lambert(scene, x, inward, albedo, radiance);
+      break;
+    }
+    case SYNTH_NOTHING:
+      break;
+  }
+  return hit;
+}

@@ -1,0 +1,38 @@
+/* The synthetic scene of include/clayfit/synth.h: a clay sphere (centre at
+ * the origin, radius 1) on a textured ground (z = -1) inside a textured
+ * cylindrical backdrop (radius 6, up to z = 5), lit by a point light.
+ * Private to src/capture. */
+#ifndef CLAYFIT_CAPTURE_SYNTH_SCENE_H
+#define CLAYFIT_CAPTURE_SYNTH_SCENE_H
+
+#include <stdint.h>
+
+#include "clayfit/model.h"
+
+typedef enum synth_surface {
+  SYNTH_NOTHING,
+  SYNTH_SPHERE,
+  SYNTH_GROUND,
+  SYNTH_BACKDROP
+} synth_surface;
+
+typedef struct synth_scene {
+  cf_model_id model;
+  const double *params;
+  double light[3];  /* the flash's world position */
+  double intensity; /* its radiant intensity (grey) */
+  uint64_t seed;    /* texture layout */
+} synth_scene;
+
+/* Shade the ray origin + t d (d unit): the radiance it carries back, per
+ * channel (MODEL.md: L = f E c_i, here with E = I/|p - x|²; the ground and
+ * the backdrop are Lambertian with a procedural albedo and are shadowed by
+ * the sphere). Returns what the ray hit first. */
+synth_surface synth_shade(const synth_scene *scene, const double origin[3], const double d[3],
+                          double radiance[3]);
+
+/* The distance along the ray to the sphere, or a negative number if it
+ * misses (the first hit; the origin must be outside the sphere). */
+double synth_hit_sphere(const double origin[3], const double d[3]);
+
+#endif /* CLAYFIT_CAPTURE_SYNTH_SCENE_H */

@@ -1,0 +1,185 @@
+/* clayfit inspect: load a capture, summarise it, and draw the pixels it
+ * uses (data_schema/inspect.schema.json with --json). */
+#include <getopt.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "clayfit/capture.h"
+#include "cli.h"
+#include "core/file.h"
+#include "json_out.h"
+
+static void inspect_usage(FILE *out) {
+  fprintf(out,
+          "usage: clayfit inspect CAPTURE [-o DIR] [--json] [--no-overlays]\n\n"
+          "Loads a capture file (data_schema/capture.schema.json) and everything it names,\n"
+          "prints a summary (images, cameras, lights, sphere, observation counts, clipped\n"
+          "fraction, pixels per image) and writes one overlay PNG per image to DIR\n"
+          "(default: the capture's folder/inspect): the photo with the pixels used green\n"
+          "and the clipped ones red. --json prints the summary as JSON instead.\n");
+}
+
+typedef struct totals {
+  size_t clipped, unlit;
+} totals;
+
+static totals count_flags(const cf_observations *o) {
+  totals t = {0, 0};
+  for (size_t i = 0; i < o->count; ++i) {
+    t.clipped += (o->flags[i] & CF_OBS_CLIPPED) != 0;
+    t.unlit += (o->flags[i] & CF_OBS_UNLIT) != 0;
+  }
+  return t;
+}
+
+static json_t *summary_json(const cf_capture *capture, const cf_capture_summary *sum,
+                            json_t *overlays) {
+  const cf_observations *o = cf_capture_observations(capture);
+  totals t = count_flags(o);
+  json_t *images = json_array();
+  for (size_t k = 0; k < cf_capture_image_count(capture); ++k) {
+    const cf_capture_image *im = cf_capture_image_at(capture, k);
+    json_array_append_new(
+        images,
+        json_pack("{s:s, s:i, s:i, s:f, s:I, s:I, s:I, s:i}", "name", im->name, "width", im->width,
+                  "height", im->height, "exposure", im->exposure, "sphere_pixels",
+                  (json_int_t)im->sphere_pixels, "observations", (json_int_t)im->observations,
+                  "clipped", (json_int_t)im->clipped, "lights", im->lights));
+  }
+  json_t *warnings = json_array();
+  for (size_t i = 0; i < sum->warnings; ++i)
+    json_array_append_new(warnings, json_string(cf_capture_warning(capture, i)));
+  json_t *doc =
+      json_pack("{s:s, s:s, s:s, s:{s:o, s:f, s:f, s:f}, s:s, s:s, s:I, s:i, s:I, s:I, s:o, s:o}",
+                "name", sum->name, "camera", sum->camera, "geometry", sum->geometry, "sphere",
+                "center", json_doubles(sum->sphere_center, 3), "radius", sum->sphere_radius,
+                "rms_px", sum->sphere_rms_px, "silhouette_kept", sum->silhouette_kept, "radiometry",
+                sum->radiometry_relative ? "relative" : "absolute", "tone_curve",
+                sum->tone_curve_unknown ? "unknown" : "known", "observations", (json_int_t)o->count,
+                "lights_per_observation", o->lights, "clipped", (json_int_t)t.clipped, "unlit",
+                (json_int_t)t.unlit, "images", images, "warnings", warnings);
+  if (sum->has_noise)
+    json_object_set_new(doc, "noise",
+                        json_pack("{s:f, s:f}", "read", sum->noise_read, "shot", sum->noise_shot));
+  if (overlays) json_object_set_new(doc, "overlays", overlays);
+  return doc;
+}
+
+static void print_summary(const cf_capture *capture, const cf_capture_summary *sum) {
+  const cf_observations *o = cf_capture_observations(capture);
+  totals t = count_flags(o);
+  size_t n = cf_capture_image_count(capture);
+  printf("capture: %s\n", sum->name[0] ? sum->name : "(unnamed)");
+  printf("camera: %s; %zu images; lights per image: %d\n", sum->camera, n, o->lights);
+  if (sum->sphere_radius > 0.0)
+    printf("sphere (%s): centre %.6g %.6g %.6g, radius %.6g world units", sum->geometry,
+           sum->sphere_center[0], sum->sphere_center[1], sum->sphere_center[2], sum->sphere_radius);
+  else
+    printf("geometry: %s", sum->geometry);
+  if (sum->sphere_rms_px > 0.0)
+    printf(" (silhouettes: RMS %.3g px over the %.3g %% of their points that fit)",
+           sum->sphere_rms_px, 100.0 * sum->silhouette_kept);
+  printf("\nradiometry: %s; tone curve: %s", sum->radiometry_relative ? "relative" : "absolute",
+         sum->tone_curve_unknown ? "unknown" : "known");
+  if (sum->has_noise) printf("; noise: read %g, shot %g", sum->noise_read, sum->noise_shot);
+  printf("\nobservations: %zu (%.3g %% with a clipped channel, %.3g %% unlit)\n", o->count,
+         o->count ? 100.0 * (double)t.clipped / (double)o->count : 0.0,
+         o->count ? 100.0 * (double)t.unlit / (double)o->count : 0.0);
+  printf("%-24s %11s %9s %12s %12s %9s\n", "image", "size", "exposure", "sphere px", "used",
+         "clipped");
+  for (size_t k = 0; k < n; ++k) {
+    const cf_capture_image *im = cf_capture_image_at(capture, k);
+    char size[32];
+    snprintf(size, sizeof size, "%dx%d", im->width, im->height);
+    printf("%-24s %11s %9.4g %12zu %12zu %9zu\n", im->name, size, im->exposure, im->sphere_pixels,
+           im->observations, im->clipped);
+  }
+  for (size_t i = 0; i < sum->warnings; ++i)
+    printf("warning: %s\n", cf_capture_warning(capture, i));
+}
+
+/* Overlays into dir, one per image, named after the image (slashes become
+ * underscores, extension .png). */
+static cf_status write_overlays(const cf_capture *capture, const char *dir, int quiet, json_t *list,
+                                cf_error *err) {
+  cf_status s = cf_make_dirs(dir, err);
+  size_t n = cf_capture_image_count(capture);
+  for (size_t k = 0; s == CF_OK && k < n; ++k) {
+    char name[512], path[4096];
+    snprintf(name, sizeof name, "%s", cf_capture_image_at(capture, k)->name);
+    for (char *p = name; *p; ++p)
+      if (*p == '/') *p = '_';
+    char *dot = strrchr(name, '.');
+    if (dot) *dot = '\0';
+    strncat(name, ".png", sizeof name - strlen(name) - 1);
+    s = cf_path_join(dir, name, path, sizeof path, err);
+    if (s == CF_OK) s = cf_capture_write_overlay(capture, k, path, err);
+    if (s == CF_OK) json_array_append_new(list, json_string(path));
+    if (!quiet) cli_progress("inspect", "writing overlays", k + 1, n);
+  }
+  return s;
+}
+
+int cmd_inspect(int argc, char **argv, cli_context *ctx) {
+  static const struct option options[] = {{"output", required_argument, NULL, 'o'},
+                                          {"json", no_argument, NULL, 'j'},
+                                          {"no-overlays", no_argument, NULL, 'n'},
+                                          {"help", no_argument, NULL, 'h'},
+                                          {0}};
+  const char *out_dir = NULL;
+  int as_json = 0, overlays = 1;
+  optind = 1;
+  opterr = 0;
+  for (int c; (c = getopt_long(argc, argv, "o:", options, NULL)) != -1;) {
+    if (c == 'o')
+      out_dir = optarg;
+    else if (c == 'j')
+      as_json = 1;
+    else if (c == 'n')
+      overlays = 0;
+    else if (c == 'h') {
+      inspect_usage(stdout);
+      return CLI_EXIT_OK;
+    } else
+      return cli_bad_option("inspect", argv);
+  }
+  if (optind + 1 != argc) {
+    cli_report("inspect", "expected one capture file (see clayfit inspect --help)");
+    return CLI_EXIT_USAGE;
+  }
+  const char *path = argv[optind];
+  cf_error err = {0};
+  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "inspect"};
+  cf_capture *capture = NULL;
+  cf_status s = cf_capture_load(path, &load_options, &capture, &err);
+  if (s != CF_OK) {
+    cli_report("inspect", err.message);
+    return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+  }
+  char default_dir[4096];
+  json_t *list = json_array();
+  if (overlays && !out_dir &&
+      (s = cf_path_dirname(path, default_dir, sizeof default_dir, &err)) == CF_OK) {
+    strncat(default_dir, "/inspect", sizeof default_dir - strlen(default_dir) - 1);
+    out_dir = default_dir;
+  }
+  if (s == CF_OK && overlays) s = write_overlays(capture, out_dir, ctx->quiet, list, &err);
+  if (s != CF_OK) {
+    json_decref(list);
+    cf_capture_free(capture);
+    cli_report("inspect", err.message);
+    return CLI_EXIT_FAILURE;
+  }
+  cf_capture_summary sum;
+  cf_capture_summarize(capture, &sum);
+  int status = CLI_EXIT_OK;
+  if (as_json) {
+    status = json_print(stdout, summary_json(capture, &sum, list)) ? CLI_EXIT_FAILURE : CLI_EXIT_OK;
+  } else {
+    print_summary(capture, &sum);
+    if (overlays) printf("overlays: %s/\n", out_dir);
+    json_decref(list);
+  }
+  cf_capture_free(capture);
+  return status;
+}
