@@ -16,10 +16,18 @@
 CHECK_MAIN_STATE;
 
 /* Tolerances, as fractions of the orbit's radius (the mean distance of the
- * true centres from their centroid). */
-static const double max_rms = 0.01, max_error = 0.02;
-/* and the cameras' orientations, after the same alignment, in degrees */
-static const double max_rotation_deg = 1.0;
+ * true centres from their centroid), and for the cameras' orientations
+ * after the same alignment. COLMAP's own precision on this scene varies
+ * from run to run (its mapper is not deterministic, even with one thread
+ * and a fixed seed; the flash moves the background's shading and the
+ * sphere's shadow with each camera; sequential matching does not close
+ * the orbit's loop): measured 0.34 to 1.44 % RMS, 0.55 to 3.3 % worst,
+ * 0.2 to 0.92 degrees. What this test must catch is a misread convention
+ * (quaternion order, a transposed rotation, camera centre = -R^T t, the
+ * +0.5 pixel centres), which puts cameras tens of percent and tens of
+ * degrees off: hence bounds of 3 %, 5 % and 2 degrees. */
+static const double max_rms = 0.03, max_error = 0.05;
+static const double max_rotation_deg = 2.0;
 
 /* Eigenvector of the largest eigenvalue of a symmetric 4 × 4 matrix
  * (cyclic Jacobi rotations). */
