@@ -16,7 +16,10 @@ add_test(NAME test_colmap_reconstruction
 set_tests_properties(test_colmap_reconstruction PROPERTIES LABELS "capture;slow"
                      SKIP_RETURN_CODE 77)
 clayfit_c_test(test_capture_exposure SOURCES capture/test_capture_exposure.c
-               LIBS clayfit_capture LABELS capture)
+               capture/ortho_scene.c LIBS clayfit_capture LABELS capture)
+clayfit_c_test(test_capture_environment SOURCES capture/test_capture_environment.c
+               capture/ortho_scene.c LIBS clayfit_capture LABELS capture
+               ARGS ${CLAYFIT_SHARED_DATA})
 clayfit_c_test(test_capture_silhouettes SOURCES capture/test_capture_silhouettes.c
                LIBS clayfit_capture LABELS capture)
 clayfit_c_test(test_capture_diligent SOURCES capture/test_capture_diligent.c

@@ -14,11 +14,12 @@
 
 #include "clayfit/capture.h"
 #include "clayfit/image.h"
+#include "ortho_scene.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
 
-enum { SIZE = 48 };
+enum { SIZE = ORTHO_SIZE };
 static char dir[] = "/tmp/clayfit-exposure-XXXXXX";
 
 static void write_scene(void) {
@@ -27,19 +28,7 @@ static void write_scene(void) {
   CHECK(cf_image_alloc(&normals, SIZE, SIZE, 3, &err) == CF_OK, "%s", err.message);
   CHECK(cf_image_alloc(&photo, SIZE, SIZE, 3, &err) == CF_OK, "%s", err.message);
   const double l[3] = {0.3, 0.2, 0.93};
-  for (int y = 0; y < SIZE; ++y)
-    for (int x = 0; x < SIZE; ++x) {
-      double nx = (x + 0.5 - 24.0) / 20.0, ny = -(y + 0.5 - 24.0) / 20.0;
-      double r2 = nx * nx + ny * ny;
-      if (r2 >= 1.0) continue;
-      double n[3] = {nx, ny, sqrt(1.0 - r2)};
-      float *p = normals.pixels + 3 * (y * SIZE + x), *q = photo.pixels + 3 * (y * SIZE + x);
-      double shade = 0.3 * fmax(0.0, n[0] * l[0] + n[1] * l[1] + n[2] * l[2]);
-      for (int c = 0; c < 3; ++c) {
-        p[c] = (float)n[c];
-        q[c] = (float)(shade * (0.6 + 0.2 * c));
-      }
-    }
+  ortho_scene(&normals, &photo, l);
   char path[256];
   snprintf(path, sizeof path, "%s/normals.exr", dir);
   CHECK(cf_image_write(path, &normals, 32, &err) == CF_OK, "%s", err.message);
@@ -108,8 +97,10 @@ int main(void) {
         sum_b += o->rgb[3 * (half + i) + c];
       }
     double ratio = sum_b / sum_a;
-    printf("the two photos after decoding: mean radiance ratio %.5f (1 when the exposures are "
-           "right, 2 or 0.5 when not)\n", ratio);
+    printf(
+        "the two photos after decoding: mean radiance ratio %.5f (1 when the exposures are "
+        "right, 2 or 0.5 when not)\n",
+        ratio);
     CHECK(fabs(ratio - 1.0) < 0.01, "the same radiance from both photos (ratio %.5f)", ratio);
     cf_capture_free(capture);
   }
