@@ -302,11 +302,15 @@ static cf_status write_capture_file(const char *dir, const render_job *job, cf_e
   char name[128];
   snprintf(name, sizeof name, "synthetic %s (%s), %d images", m->name, m->code, o->images);
   json_t *doc = json_pack(
-      "{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:{s:f, s:f}, s:o, s:{s:f}, s:[o]}",
-      "clayfit_capture", 1, "name", name, "camera", "type", "colmap", "model", "sparse/0", "images",
-      images, "colour", "encoding", o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry",
-      "absolute", "noise", "read", o->read_noise, "shot", o->shot_noise, "geometry", geometry,
-      "scale", "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+      "{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:o, s:{s:f}, s:[o]}", "clayfit_capture", 1,
+      "name", name, "camera", "type", "colmap", "model", "sparse/0", "images", images, "colour",
+      "encoding", o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry", "absolute",
+      "geometry", geometry, "scale", "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+  /* the noise model, when there is noise (without one the fit estimates σ
+   * from its residuals) */
+  if (o->read_noise > 0.0 || o->shot_noise > 0.0)
+    json_object_set_new(doc, "noise",
+                        json_pack("{s:f, s:f}", "read", o->read_noise, "shot", o->shot_noise));
   return write_json(dir, "capture.json", doc, err);
 }
 

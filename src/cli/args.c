@@ -74,18 +74,18 @@ cf_status cli_parse_count(const char *text, const char *what, long min, long max
 }
 
 /* Apply one "name=value" assignment to the parameter vector. */
-cf_status cli_apply_param(cf_model_id model, const char *assignment, double *params, int *given,
-                          cf_error *err) {
+cf_status cli_apply_param(cf_model_id model, const char *flag, const char *assignment,
+                          double *params, int *given, cf_error *err) {
   const char *equals = strchr(assignment, '=');
   if (!equals || equals == assignment)
     return cf_error_set(err, CF_EINVAL,
-                        "--param '%s': expected name=value (for example "
+                        "%s '%s': expected name=value (for example "
                         "albedo=0.8,0.5,0.3 or roughness=0.4)",
-                        assignment);
+                        flag, assignment);
   char name[64];
   size_t length = (size_t)(equals - assignment);
   if (length >= sizeof name)
-    return cf_error_set(err, CF_EINVAL, "--param '%s': name too long", assignment);
+    return cf_error_set(err, CF_EINVAL, "%s '%s': name too long", flag, assignment);
   memcpy(name, assignment, length);
   name[length] = '\0';
 
@@ -93,10 +93,10 @@ cf_status cli_apply_param(cf_model_id model, const char *assignment, double *par
   const cf_param_info *info = NULL;
   cf_status s = cf_model_param_find(model, name, &slot, &info, err);
   if (s != CF_OK) return s;
-  if (given[slot]) return cf_error_set(err, CF_EINVAL, "--param %s is given twice", name);
+  if (given[slot]) return cf_error_set(err, CF_EINVAL, "%s %s is given twice", flag, name);
 
   char what[96];
-  snprintf(what, sizeof what, "--param %s", name);
+  snprintf(what, sizeof what, "%s %s", flag, name);
   const char *value = equals + 1;
   double x[3] = {0.0, 0.0, 0.0};
   if (info->components == 3 && strchr(value, ',')) {

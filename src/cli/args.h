@@ -23,7 +23,8 @@ cf_status cli_parse_count(const char *text, const char *what, long min, long max
  * parameter takes "r,g,b" or one number for all three. given[] marks the
  * slots set so far (a parameter given twice is an error). The range is
  * not checked here (cf_params_check). */
-cf_status cli_apply_param(cf_model_id model, const char *assignment, double *params, int *given,
+cf_status cli_apply_param(cf_model_id model, const char *flag, const char *assignment,
+                          double *params, int *given,
                           cf_error *err);
 
 #endif /* CLAYFIT_CLI_ARGS_H */

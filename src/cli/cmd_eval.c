@@ -130,7 +130,7 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
   cf_status s = cf_model_find(model_text, &model, &err);
   if (s == CF_OK) cf_model_default_params(model, params);
   for (int k = 0; s == CF_OK && k < assignment_count; ++k)
-    s = cli_apply_param(model, assignments[k], params, given, &err);
+    s = cli_apply_param(model, "--param", assignments[k], params, given, &err);
   if (s == CF_OK) s = cf_params_check(model, params, &err);
   if (s == CF_OK) s = cli_parse_direction(light_text, "--light", l, &err);
   if (s == CF_OK) s = cli_parse_direction(view_text, "--view", v, &err);

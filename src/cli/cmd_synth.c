@@ -141,7 +141,7 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
     int given[CF_MAX_DIM] = {0};
     cf_model_default_params(o.model, o.params);
     for (int k = 0; s == CF_OK && k < assignment_count; ++k)
-      s = cli_apply_param(o.model, assignments[k], o.params, given, &err);
+      s = cli_apply_param(o.model, "--param", assignments[k], o.params, given, &err);
   }
   if (s == CF_OK) s = cf_params_check(o.model, o.params, &err);
   if (s != CF_OK) {

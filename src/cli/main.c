@@ -17,6 +17,7 @@ static const command commands[] = {
     {"models", cmd_models, "list the model ladder and every parameter's unit and range"},
     {"synth", cmd_synth, "render a synthetic capture with known parameters"},
     {"inspect", cmd_inspect, "load a capture, summarise it, draw the pixels it uses"},
+    {"fit", cmd_fit, "fit a model to a capture: parameters, uncertainty, fit.json"},
     {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
 };
 enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };

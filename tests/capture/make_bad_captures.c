@@ -111,7 +111,7 @@ int main(int argc, char **argv) {
 
   if (synth(root, "wrong_type", dir, sizeof dir)) return 1;
   if (edit(dir, "capture.json", "\"lights\": [", "\"lights\": {\"x\": [")) return 1;
-  if (edit(dir, "capture.json", "]\n}", "]}\n}")) return 1;
+  if (edit(dir, "capture.json", "  ],\n  \"noise\"", "  ]},\n  \"noise\"")) return 1;
 
   if (synth(root, "missing_field", dir, sizeof dir)) return 1;
   if (edit(dir, "capture.json", "  \"colour\": {\n    \"encoding\": \"linear\"\n  },\n", ""))

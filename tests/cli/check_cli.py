@@ -2,11 +2,13 @@
 """Run one clayfit command and check what it did.
 
 usage: check_cli.py [--exit N] [--stderr REGEX] [--schema FILE]
-                    [--expect PYTHON_EXPRESSION] -- COMMAND ARGS...
+                    [--json-file PATH] [--expect PYTHON_EXPRESSION]
+                    -- COMMAND ARGS...
 
 --exit     the exit status the command must return (default 0)
 --stderr   a regular expression stderr must contain
 --schema   stdout must be JSON valid against this JSON Schema (2020-12)
+--json-file  the JSON to check is this file (written by the command), not stdout
 --expect   a Python expression over `doc` (stdout's JSON) that must be true
 """
 import argparse
@@ -24,6 +26,7 @@ def main() -> int:
     parser.add_argument("--exit", type=int, default=0)
     parser.add_argument("--stderr")
     parser.add_argument("--schema")
+    parser.add_argument("--json-file")
     parser.add_argument("--expect", action="append", default=[])
     parser.add_argument("command", nargs=argparse.REMAINDER)
     args = parser.parse_args()
@@ -39,9 +42,13 @@ def main() -> int:
     doc = None
     if args.schema or args.expect:
         try:
-            doc = json.loads(result.stdout)
-        except json.JSONDecodeError as error:
-            failures.append(f"stdout is not JSON: {error}")
+            if args.json_file:
+                with open(args.json_file, encoding="utf-8") as f:
+                    doc = json.load(f)
+            else:
+                doc = json.loads(result.stdout)
+        except (OSError, json.JSONDecodeError) as error:
+            failures.append(f"{args.json_file or 'stdout'} is not JSON: {error}")
     if doc is not None and args.schema:
         with open(args.schema, encoding="utf-8") as f:
             schema = json.load(f)

@@ -1,0 +1,213 @@
+/* clayfit: fitting a model of the ladder to a capture's observations.
+ *
+ * The parameters that minimise
+ *   Σ_i,c ρ( r_ic² ),  r_ic = (s · e_k · Σ_j f_c(n_i, l_ij, v_i) E_ijc c_i,ij − y_ic) / σ_ic
+ * over the observations i and channels c, where
+ *   f        the model's BRDF (include/clayfit/model.h),
+ *   E, c_i   each light's irradiance and cosine, y the measured radiance,
+ *   e_k      the image's exposure when fitted (their mean log is 0; the
+ *            capture's own exposures are already divided out of y),
+ *   s        the global scale when the radiometry is relative,
+ *   σ        the noise: sqrt(read² + shot · max(y, 0)) when the capture
+ *            gives it, else one σ for all estimated from the residuals,
+ *   ρ        Huber (default), Cauchy, or the identity, in units of σ.
+ * A clipped channel is censored: it only counts while the model predicts
+ * less than the clip level (the true value is at least what was seen).
+ * Bounds are MODEL.md's ranges, enforced by the solver (Ceres, Levenberg-
+ * Marquardt); nothing is clamped. */
+#ifndef CLAYFIT_FIT_H
+#define CLAYFIT_FIT_H
+
+#include <stddef.h>
+
+#include "clayfit/capture.h"
+#include "clayfit/model.h"
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_loss { CF_LOSS_NONE, CF_LOSS_HUBER, CF_LOSS_CAUCHY } cf_loss;
+
+/* Why a parameter has the value it has. */
+typedef enum cf_param_status {
+  CF_PARAM_FITTED,          /* estimated from the capture */
+  CF_PARAM_HELD,            /* held by the user (--hold) */
+  CF_PARAM_HELD_FOR_SCALE,  /* held because it sets the absolute scale of a
+                               capture with relative radiometry */
+  CF_PARAM_UNCONSTRAINED,   /* not constrained by this capture: held at its
+                               default */
+  CF_PARAM_AT_BOUND         /* fitted, and the data put it at a bound of its
+                               range (they prefer a value at or beyond it):
+                               no standard deviation (NaN) */
+} cf_param_status;
+
+typedef struct cf_fit_options {
+  cf_model_id model;
+  /* per slot: hold[k] = 1 holds params[k] at hold_value[k] (the user's
+   * --hold), free[k] = 1 frees a slot that would be held for the scale */
+  int hold[CF_MAX_DIM];
+  double hold_value[CF_MAX_DIM];
+  int free[CF_MAX_DIM];
+  cf_loss loss;
+  double loss_scale;      /* in σ; default 3 */
+  int fit_exposures;      /* fit e_k per image (their mean log fixed at 0) */
+  int multistart;         /* 1 (default): the deterministic multi-start */
+  int use_start;          /* 1: start from `start` (and `start_scale`)
+                             instead of the multi-start, for example from
+                             the model choice's fit on a subsample */
+  double start[CF_MAX_DIM];
+  double start_scale;
+  int max_iterations;     /* per start; default 100 */
+  int threads;            /* Ceres' threads; default 2 */
+  double density;         /* the film's known thickness for the report of
+                             density and absorption; NaN: the convention
+                             (mean absorption 0.8) */
+  cf_progress_fn progress;
+  void *progress_user;
+} cf_fit_options;
+
+void cf_fit_default_options(cf_fit_options *options, cf_model_id model);
+
+/* One start of the multi-start and where it ended. */
+typedef struct cf_fit_start {
+  double start[CF_MAX_DIM], end[CF_MAX_DIM];
+  double cost; /* ½ Σ ρ at the end */
+  int iterations;
+} cf_fit_start;
+
+enum { CF_FIT_MAX_STARTS = 32, CF_FIT_MAX_WARNINGS = 8 };
+#define CF_FIT_CORE_RADIUS_PX 3.0
+
+/* The stages of a fit, for their wall times. */
+typedef enum cf_fit_stage {
+  CF_FIT_STAGE_START,      /* closed-form albedo and the multi-start */
+  CF_FIT_STAGE_REFINE,     /* the best start on a larger subsample */
+  CF_FIT_STAGE_SOLVE,      /* every observation: weights, robust loss,
+                              unconstrained parameters held */
+  CF_FIT_STAGE_STATISTICS, /* residual statistics */
+  CF_FIT_STAGE_COUNT
+} cf_fit_stage;
+
+const char *cf_fit_stage_name(cf_fit_stage stage);
+
+typedef struct cf_fit_result {
+  cf_model_id model;
+  double params[CF_MAX_DIM]; /* the fitted (or held) values */
+  double sd[CF_MAX_DIM];     /* standard deviations; 0 where not fitted */
+  cf_param_status status[CF_MAX_DIM];
+  int free_count;            /* fitted slots, in slot order */
+  int free_slots[CF_MAX_DIM];
+  double correlation[CF_MAX_DIM * CF_MAX_DIM]; /* free_count² */
+  double scale, scale_sd;    /* the global scale s (1 for absolute radiometry) */
+  int scale_fitted;
+  size_t images;
+  double *exposures;         /* e_k per image (1 unless fitted), owned */
+  double sigma;              /* σ when estimated from the residuals, else 0 */
+
+  /* residuals over every observation and channel, unweighted, radiance
+   * units; relative = RMSE / RMS of the measurements */
+  size_t residuals, censored, rejected; /* rejected: |r| beyond the loss scale */
+  double rmse, relative_rmse;
+  double *image_rmse, *image_relative_rmse; /* per image, owned */
+  double cost;               /* ½ Σ ρ(r²) at the end, in units of σ² */
+  int iterations;            /* Levenberg-Marquardt iterations on every
+                                observation (all solves of that stage) */
+  int solves;                /* Ceres solves of that stage */
+  char termination[64];      /* of the last one */
+  double solve_seconds;      /* Ceres' time in them */
+  double stage_seconds[CF_FIT_STAGE_COUNT]; /* wall time of each stage */
+
+  int free_unknowns;         /* everything estimated: model slots (fitted or
+                                at a bound), scale, exposures */
+
+  int starts;                /* 0 when the fit began at options.start */
+  cf_fit_start start[CF_FIT_MAX_STARTS];
+  int best_start;
+  int ambiguous;             /* two distant starts ended within the noise */
+
+  /* the highlight cores: the observations within CF_FIT_CORE_RADIUS_PX of
+   * each image's brightest observation (where a lobe's shape shows), and
+   * the rest */
+  size_t core_residuals;
+  double core_rmse, core_relative_rmse, rest_rmse, rest_relative_rmse;
+
+  int warning_count;
+  char warnings[CF_FIT_MAX_WARNINGS][256];
+} cf_fit_result;
+
+/* ---- the choice of the model (clayfit fit --model auto) ----
+ *
+ * Every model of the ladder M0 → M4 is fitted to the training part of a
+ * sample of the observations (at most CF_FIT_CHOICE_SAMPLE, spread evenly)
+ * and judged two ways:
+ *   BIC      2 C + k ln n on the training part, C = ½ Σ ρ(r²) at one σ
+ *            for all candidates (the capture's noise model, or the smallest
+ *            σ the candidates estimated), k the unknowns fitted, n the
+ *            residuals;
+ *   held out the robust RMS √(mean ρ(r²)) (in units of σ) on the held-out
+ *            part: every fourth image (with four or more images and no
+ *            exposures fitted; with a light per image, as in DiLiGenT,
+ *            these are held-out lights), else the last image, else every
+ *            fourth observation.
+ * Going up the ladder, a richer model replaces the current choice only
+ * when it is clearly better on both: BIC lower by more than bic_margin
+ * (10: "very strong" evidence, Kass & Raftery 1995) and the held-out RMS
+ * lower by more than heldout_margin (1 %: a model error of about a seventh
+ * of the noise). The chosen model is then fitted to every observation,
+ * starting from its candidate fit. */
+#define CF_FIT_CHOICE_SAMPLE 60000
+#define CF_FIT_CHOICE_BIC_MARGIN 10.0
+#define CF_FIT_CHOICE_HELDOUT_MARGIN 0.01
+
+typedef struct cf_fit_candidate {
+  cf_model_id model;
+  int ok;                  /* 0: the fit failed (why: note) */
+  cf_fit_result fit;       /* on the training part (owns its arrays) */
+  int parameters;          /* k */
+  size_t residuals;        /* n, training */
+  double cost, bic;        /* training, at the common σ */
+  size_t heldout_residuals;
+  double heldout_score;    /* √(mean ρ(r²)), σ units */
+  double heldout_rmse, heldout_relative_rmse; /* plain, radiance units */
+  double seconds;
+  int chosen;
+  char note[256];          /* how it compared */
+} cf_fit_candidate;
+
+typedef struct cf_fit_choice {
+  int automatic;           /* 0: the model was forced (--model M) */
+  cf_model_id chosen;
+  int count;
+  cf_fit_candidate candidate[CF_MODEL_COUNT];
+  size_t train_observations, heldout_observations;
+  char heldout[256];       /* what was held out */
+  double sigma;            /* the common σ (0: the capture's noise model) */
+  cf_loss loss;            /* the loss of the scores (the first model's) */
+  double loss_scale;
+  double bic_margin, heldout_margin;
+  double seconds;          /* wall time of the choice (the candidates' fits
+                              and scores) */
+} cf_fit_choice;
+
+/* Choose the model (options[m] for model m: each candidate's holds) and fit
+ * it to every observation: result is the chosen model's fit. Free both
+ * with cf_fit_choice_free and cf_fit_result_free. */
+cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
+                      cf_fit_choice *choice, cf_fit_result *result, cf_error *err);
+void cf_fit_choice_free(cf_fit_choice *choice);
+
+/* Fit one model to a loaded capture. The result owns its per-image arrays
+ * (cf_fit_result_free). */
+cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *options,
+                     cf_fit_result *result, cf_error *err);
+void cf_fit_result_free(cf_fit_result *result);
+
+const char *cf_param_status_name(cf_param_status status);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_FIT_H */

@@ -1,0 +1,338 @@
+/* Fitting one model to a capture (include/clayfit/fit.h):
+ *   1. the plan: what is free (the model's parameters but those held by
+ *      the user, or, for relative radiometry, the interface F0 that sets
+ *      the scale; the global scale; the exposures) (fit_plan.c);
+ *   2. the closed-form albedo from the least specular observations, then
+ *      the deterministic multi-start on a subsample (fit_multistart.c);
+ *   3. the best start refined on a larger subsample, then on every
+ *      observation, with the robust loss and, for a noise model, weights
+ *      from the prediction to their fixed point;
+ *   4. the covariance (ceres::Covariance); parameters the capture does not
+ *      constrain are held at their defaults, named, and the fit repeated
+ *      (fit_uncertainty.c);
+ *   5. residual statistics (fit_residuals.c). */
+#include "clayfit/fit.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "fit_multistart.h"
+#include "fit_plan.h"
+#include "fit_problem.h"
+#include "fit_residuals.h"
+#include "fit_run.h"
+#include "fit_uncertainty.h"
+#include "lsq.h"
+
+/* The best start refines on about REFINE_TARGET observations before all of
+ * them (each stage starts closer, where iterations cost more). */
+enum { REFINE_TARGET = 40000, MAX_UNCONSTRAINED_ROUNDS = 4, REWEIGHT_ROUNDS = 4 };
+
+void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
+  memset(o, 0, sizeof *o);
+  o->model = model;
+  o->loss = CF_LOSS_HUBER;
+  o->loss_scale = 3.0;
+  o->multistart = 1;
+  o->max_iterations = 100;
+  o->threads = 2;
+  o->density = NAN;
+}
+
+const char *cf_fit_stage_name(cf_fit_stage stage) {
+  switch (stage) {
+    case CF_FIT_STAGE_START: return "start";
+    case CF_FIT_STAGE_REFINE: return "refine";
+    case CF_FIT_STAGE_SOLVE: return "solve";
+    case CF_FIT_STAGE_STATISTICS: return "statistics";
+    case CF_FIT_STAGE_COUNT: break;
+  }
+  return "unknown";
+}
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+const char *cf_param_status_name(cf_param_status status) {
+  switch (status) {
+    case CF_PARAM_FITTED: return "fitted";
+    case CF_PARAM_HELD: return "held";
+    case CF_PARAM_HELD_FOR_SCALE: return "held: sets the absolute scale";
+    case CF_PARAM_UNCONSTRAINED: return "not constrained by this capture";
+    case CF_PARAM_AT_BOUND: return "fitted: at a bound of its range";
+  }
+  return "unknown";
+}
+
+void cf_fit_result_free(cf_fit_result *result) {
+  free(result->exposures);
+  free(result->image_rmse);
+  free(result->image_relative_rmse);
+  result->exposures = result->image_rmse = result->image_relative_rmse = NULL;
+}
+
+/* Relative radiometry fixes the scale by holding the interface F0 (0.04
+ * unless the user holds another value). When that needs an albedo above
+ * its bound 1 (an albedo channel ends at the bound), the assumption is
+ * inconsistent with the data; the scale then comes from the albedo
+ * instead: the brightest channel at the bound is held at 1 and the F0
+ * fitted. Returns 1 when it switched (with a warning). */
+static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *plan,
+                             cf_fit_result *r) {
+  int sk = fit_scale_slot(p->model);
+  if (!plan->scale || sk < 0 || plan->status[sk] != CF_PARAM_HELD_FOR_SCALE || o->hold[sk])
+    return 0;
+  int albedo = -1;
+  for (int u = 0; u < p->num_unknowns; ++u) {
+    const fit_unknown *unk = &p->unknowns[u];
+    if (unk->kind == FIT_LOG_SLOT && p->at_bound[u] > 0) albedo = unk->slot;
+  }
+  if (albedo < 0) return 0;
+  char name[48];
+  plan->status[albedo] = CF_PARAM_HELD_FOR_SCALE;
+  plan->status[sk] = CF_PARAM_FITTED;
+  fit_add_warning(r,
+                  "relative radiometry: with the interface F0 held at %g the albedo would exceed "
+                  "1, so the scale comes from the albedo instead (%s held at 1, F0 fitted); "
+                  "hold F0 (--hold) to choose another assumption",
+                  p->params[sk], cf_model_slot_name(p->model, albedo, name, sizeof name));
+  return 1;
+}
+
+/* Refine (params, log_scale) on a subsample of about `target` observations
+ * of the population (nothing to do when it has fewer than twice as many):
+ * robust loss, and weights from the prediction with a noise model. */
+static cf_status refine_on_subsample(const cf_capture *capture, const fit_population *population,
+                                     const cf_fit_options *o, fit_plan *plan, size_t target,
+                                     double sigma, double *params, double *log_scale,
+                                     cf_fit_result *r, int *switched, cf_error *err) {
+  if (population->count < 2 * target) return CF_OK;
+  fit_sample sample;
+  fit_problem sub;
+  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population, target, err);
+  if (s != CF_OK) return s;
+  s = fit_declare(&sub, plan, err);
+  if (s == CF_OK) {
+    memcpy(sub.params, params, sizeof sub.params);
+    sub.log_scale = *log_scale;
+    if (!fit_capture_has_noise(capture)) fit_problem_set_sigma(&sub, capture, sigma);
+    sub.loss = o->loss;
+    sub.loss_scale = o->loss_scale;
+    cf_lsq_summary summary;
+    s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, err);
+    if (s == CF_OK && !*switched && scale_from_albedo(&sub, o, plan, r)) {
+      *switched = 1;
+      s = fit_declare(&sub, plan, err);
+      if (s == CF_OK) s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, err);
+    }
+  }
+  if (s == CF_OK) {
+    memcpy(params, sub.params, sizeof sub.params);
+    *log_scale = sub.log_scale;
+  }
+  fit_problem_release(&sub);
+  fit_sample_free(&sample);
+  return s;
+}
+
+static cf_status check_options(const cf_fit_options *o, cf_error *err) {
+  const cf_model_info *m = cf_model_info_get(o->model);
+  if (!m) return cf_error_set(err, CF_EINVAL, "invalid model id %d", (int)o->model);
+  for (int k = 0; k < m->dim; ++k) {
+    const cf_param_info *info = NULL;
+    for (int j = 0; j < m->param_count; ++j)
+      if (k >= m->offsets[j]) info = cf_param_info_get(m->params[j]);
+    char name[48];
+    cf_model_slot_name(o->model, k, name, sizeof name);
+    if (o->hold[k] && (!(o->hold_value[k] >= info->lower) || !(o->hold_value[k] <= info->upper)))
+      return cf_error_set(err, CF_ERANGE, "--hold %s=%g is outside its range [%g, %g]", name,
+                          o->hold_value[k], info->lower, info->upper);
+    if (o->use_start && (!(o->start[k] >= info->lower) || !(o->start[k] <= info->upper)))
+      return cf_error_set(err, CF_ERANGE, "the start's %s = %g is outside its range [%g, %g]",
+                          name, o->start[k], info->lower, info->upper);
+  }
+  if (o->use_start && !(o->start_scale > 0.0 && isfinite(o->start_scale)))
+    return cf_error_set(err, CF_ERANGE, "the start's scale %g is not a positive number",
+                        o->start_scale);
+  return CF_OK;
+}
+
+void fit_add_warning(cf_fit_result *r, const char *format, ...) {
+  if (r->warning_count == CF_FIT_MAX_WARNINGS) return;
+  va_list args;
+  va_start(args, format);
+  vsnprintf(r->warnings[r->warning_count++], sizeof r->warnings[0], format, args);
+  va_end(args);
+}
+
+/* The result from the solved problem and its covariance. */
+static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const double *covariance,
+                             cf_fit_result *r, cf_error *err) {
+  const cf_model_info *m = cf_model_info_get(p->model);
+  memcpy(r->params, p->params, sizeof p->params);
+  for (int k = 0; k < m->dim; ++k) r->status[k] = plan->status[k];
+  int n = p->num_unknowns, map[CF_MAX_DIM];
+  r->free_count = 0;
+  r->free_unknowns = 0;
+  for (int u = 0; u < n; ++u) {
+    const fit_unknown *unk = &p->unknowns[u];
+    double var = covariance[u * n + u];
+    ++r->free_unknowns;
+    if (unk->kind == FIT_LOG_SCALE) {
+      r->scale_sd = exp(p->log_scale) * sqrt(fmax(0.0, var)); /* d s = s d log s */
+    } else if (unk->kind == FIT_LOG_EXPOSURE) {
+      continue;
+    } else if (p->at_bound[u]) {
+      r->status[unk->slot] = CF_PARAM_AT_BOUND;
+      r->sd[unk->slot] = NAN;
+    } else {
+      r->sd[unk->slot] = fit_slot_sd(p, unk, var);
+      map[r->free_count] = u;
+      r->free_slots[r->free_count++] = unk->slot;
+    }
+  }
+  /* the correlation of the model's free slots */
+  for (int a = 0; a < r->free_count; ++a)
+    for (int b = 0; b < r->free_count; ++b) {
+      double va = covariance[map[a] * n + map[a]], vb = covariance[map[b] * n + map[b]];
+      r->correlation[a * r->free_count + b] =
+          va > 0.0 && vb > 0.0 ? covariance[map[a] * n + map[b]] / sqrt(va * vb) : (a == b);
+    }
+  r->scale = exp(p->log_scale);
+  r->scale_fitted = plan->scale;
+  r->images = p->images;
+  r->exposures = malloc(p->images * sizeof *r->exposures);
+  if (!r->exposures) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t k = 0; k < p->images; ++k) r->exposures[k] = exp(p->log_exposures[k]);
+  return CF_OK;
+}
+
+cf_status fit_run_population(const cf_capture *capture, const fit_population *population,
+                             const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
+  memset(r, 0, sizeof *r);
+  r->model = o->model;
+  cf_status s = check_options(o, err);
+  if (s != CF_OK) return s;
+  const cf_model_info *m = cf_model_info_get(o->model);
+  fit_plan plan;
+  fit_plan_for(capture, o, &plan);
+  if (cf_capture_observations(capture)->count == 0 || population->count == 0)
+    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+
+  /* 2. the start: the multi-start, or the one given */
+  double params[CF_MAX_DIM], log_scale = 0.0, sigma = 1.0, clock = now_seconds(), then;
+  if (o->use_start) {
+    memcpy(params, o->start, sizeof params);
+    for (int k = 0; k < m->dim; ++k)
+      if (o->hold[k]) params[k] = o->hold_value[k];
+    int sk = fit_scale_slot(o->model); /* the scale's assumption, not the start's F0 */
+    if (sk >= 0 && plan.status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
+      params[sk] = FIT_SCALE_F0;
+    log_scale = plan.scale ? log(o->start_scale) : 0.0;
+    s = fit_start_sigma(capture, population, o, params, log_scale, &sigma, err);
+  } else {
+    s = fit_multistart(capture, population, o, &plan, r, params, &log_scale, &sigma, err);
+  }
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_START] = (then = now_seconds()) - clock;
+  clock = then;
+
+  /* 3. a larger subsample, then the whole population, with σ and the
+   * robust loss */
+  int switched = 0;
+  s = refine_on_subsample(capture, population, o, &plan, REFINE_TARGET, sigma, params, &log_scale,
+                          r, &switched, err);
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = now_seconds()) - clock;
+  clock = then;
+  fit_problem p;
+  s = fit_problem_init(&p, capture, o->model, population->index, population->count, err);
+  if (s != CF_OK) return s;
+  memcpy(p.params, params, sizeof params);
+  p.log_scale = log_scale;
+  cf_lsq_summary summary = {0};
+  double *covariance = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *covariance);
+  double *jtj = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *jtj);
+  if (!covariance || !jtj) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) s = fit_declare(&p, &plan, err);
+  int has_noise = fit_capture_has_noise(capture);
+  if (!has_noise) {
+    fit_problem_set_sigma(&p, capture, sigma);
+    r->sigma = sigma;
+  }
+  p.loss = o->loss;
+  p.loss_scale = o->loss_scale;
+  /* with a noise model, weights from the prediction, to their fixed point */
+  if (s == CF_OK && has_noise)
+    s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, err);
+  if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
+
+  /* 4. robust solves until every free parameter is constrained */
+  int rank_deficient = 0;
+  for (int round = 0; s == CF_OK && round < MAX_UNCONSTRAINED_ROUNDS; ++round) {
+    fit_progress(o, "solving", (size_t)round, MAX_UNCONSTRAINED_ROUNDS);
+    s = fit_solve(&p, o, o->max_iterations, &summary, err);
+    if (s == CF_OK && !switched && scale_from_albedo(&p, o, &plan, r)) {
+      switched = 1;
+      s = fit_declare(&p, &plan, err);
+      if (s == CF_OK) s = fit_solve(&p, o, o->max_iterations, &summary, err);
+    }
+    if (s == CF_OK) s = fit_normal_matrix(&p, jtj, err);
+    if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
+    int found = 0;
+    if (s == CF_OK) s = fit_find_unconstrained(&p, jtj, covariance, rank_deficient, &plan, &found);
+    if (s != CF_OK || !found) break;
+    double defaults[CF_MAX_DIM];
+    cf_model_default_params(o->model, defaults);
+    for (int k = 0; k < m->dim; ++k) /* held at the default */
+      if (plan.status[k] == CF_PARAM_UNCONSTRAINED) p.params[k] = defaults[k];
+    s = fit_declare(&p, &plan, err);
+  }
+  if (s == CF_OK && rank_deficient)
+    s = cf_error_set(err, CF_ENUMERIC,
+                     "the capture does not constrain the fit even with the unconstrained "
+                     "parameters held");
+  fit_progress(o, "solving", MAX_UNCONSTRAINED_ROUNDS, MAX_UNCONSTRAINED_ROUNDS);
+
+  /* 5. the result */
+  if (s == CF_OK) s = fill_result(&p, &plan, covariance, r, err);
+  if (s == CF_OK) {
+    r->cost = summary.final_cost;
+    r->iterations = p.iterations;
+    r->solves = p.solves;
+    snprintf(r->termination, sizeof r->termination, "%s", summary.termination);
+    r->solve_seconds = p.solver_seconds;
+    r->ambiguous = fit_ambiguous(r, o->model, has_noise ? 1.0 : sigma * sigma);
+    if (r->ambiguous)
+      fit_add_warning(r, "two starts far apart ended within the noise of each other: the "
+                         "capture does not tell them apart (see starts)");
+    cf_capture_summary summary_of_capture;
+    cf_capture_summarize(capture, &summary_of_capture);
+    if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
+      fit_add_warning(r, "the capture's radiometry is relative and %s has no interface F0 to "
+                         "fix the scale: its albedo is in the lights' relative units",
+                      m->code);
+  }
+  r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = now_seconds()) - clock;
+  clock = then;
+  if (s == CF_OK) s = fit_statistics(&p, o, r, err);
+  r->stage_seconds[CF_FIT_STAGE_STATISTICS] = now_seconds() - clock;
+  free(jtj);
+  free(covariance);
+  fit_problem_release(&p);
+  if (s != CF_OK) cf_fit_result_free(r);
+  return s;
+}
+
+cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_result *r,
+                     cf_error *err) {
+  fit_population all = {NULL, cf_capture_observations(capture)->count};
+  return fit_run_population(capture, &all, o, r, err);
+}

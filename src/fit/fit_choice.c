@@ -1,0 +1,221 @@
+/* The choice of the model (clayfit fit --model auto; include/clayfit/fit.h
+ * states the rule): every model of the ladder fitted to the training part
+ * of a sample, scored by BIC on it and by the robust RMS on the held-out
+ * part, the simplest model kept unless a richer one is clearly better on
+ * both, and the chosen one fitted to every observation from its candidate
+ * fit. */
+#include "clayfit/fit.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "fit_plan.h"
+#include "fit_problem.h"
+#include "fit_residuals.h"
+#include "fit_run.h"
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* The sample (every stride-th observation, at most CF_FIT_CHOICE_SAMPLE)
+ * split into a training and a held-out part; `heldout` says how. */
+typedef struct choice_split {
+  uint32_t *train, *test;
+  size_t train_count, test_count;
+} choice_split;
+
+static cf_status split_sample(const cf_capture *capture, int exposures_fitted, choice_split *split,
+                              char *heldout, size_t heldout_size, cf_error *err) {
+  const cf_observations *obs = cf_capture_observations(capture);
+  size_t images = cf_capture_image_count(capture);
+  size_t stride = (obs->count + CF_FIT_CHOICE_SAMPLE - 1) / CF_FIT_CHOICE_SAMPLE;
+  if (stride == 0) stride = 1;
+  size_t n = (obs->count + stride - 1) / stride;
+  memset(split, 0, sizeof *split);
+  split->train = malloc((n ? n : 1) * sizeof *split->train);
+  split->test = malloc((n ? n : 1) * sizeof *split->test);
+  if (!split->train || !split->test) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  /* held-out images need their exposures known: with fitted exposures
+   * (or one image) observations are held out instead */
+  int by_image = !exposures_fitted && images >= 2;
+  if (by_image && images >= 4)
+    snprintf(heldout, heldout_size, "every fourth image (images 4, 8, ...; %zu of %zu)",
+             images / 4, images);
+  else if (by_image)
+    snprintf(heldout, heldout_size, "the last image (%zu of %zu)", images, images);
+  else
+    snprintf(heldout, heldout_size, "every fourth observation of the sample%s",
+             exposures_fitted ? " (the exposures are fitted, so no image is held out)" : "");
+  for (size_t j = 0, i = 0; i < obs->count; i += stride, ++j) {
+    size_t k = obs->image[i];
+    int test = !by_image ? j % 4 == 3 : images >= 4 ? k % 4 == 3 : k == images - 1;
+    if (test) split->test[split->test_count++] = (uint32_t)i;
+    else split->train[split->train_count++] = (uint32_t)i;
+  }
+  if (split->train_count < 16 || split->test_count < 4)
+    return cf_error_set(err, CF_EINVAL,
+                        "too few observations to choose the model (%zu for training, %zu held "
+                        "out): give --model",
+                        split->train_count, split->test_count);
+  return CF_OK;
+}
+
+static void split_free(choice_split *split) {
+  free(split->train);
+  free(split->test);
+}
+
+/* Fit every candidate to the training part. */
+static void fit_candidates(const cf_capture *capture, const cf_fit_options options[],
+                           const fit_population *train, cf_fit_choice *choice) {
+  const cf_fit_options *first = &options[0];
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
+    cf_fit_candidate *c = &choice->candidate[m];
+    c->model = (cf_model_id)m;
+    if (first->progress)
+      first->progress(first->progress_user, "choosing the model", (size_t)m, CF_MODEL_COUNT);
+    cf_fit_options o = options[m];
+    o.model = (cf_model_id)m;
+    o.progress = NULL;
+    cf_error err = {0};
+    double clock = now_seconds();
+    cf_status s = fit_run_population(capture, train, &o, &c->fit, &err);
+    c->seconds = now_seconds() - clock;
+    c->ok = s == CF_OK;
+    if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
+  }
+  if (first->progress)
+    first->progress(first->progress_user, "choosing the model", CF_MODEL_COUNT, CF_MODEL_COUNT);
+  choice->count = CF_MODEL_COUNT;
+}
+
+/* BIC and the held-out scores at the common σ. */
+static cf_status score_candidates(const cf_capture *capture, const fit_population *train,
+                                  const fit_population *test, cf_fit_choice *choice,
+                                  cf_error *err) {
+  int has_noise = fit_capture_has_noise(capture);
+  choice->sigma = 0.0;
+  for (int m = 0; m < choice->count && !has_noise; ++m) {
+    const cf_fit_candidate *c = &choice->candidate[m];
+    if (c->ok && c->fit.sigma > 0.0 && (choice->sigma == 0.0 || c->fit.sigma < choice->sigma))
+      choice->sigma = c->fit.sigma;
+  }
+  if (!has_noise && !(choice->sigma > 0.0))
+    return cf_error_set(err, CF_ENUMERIC, "no model of the ladder could be fitted to choose from");
+  for (int m = 0; m < choice->count; ++m) {
+    cf_fit_candidate *c = &choice->candidate[m];
+    if (!c->ok) continue;
+    fit_score on_train, on_test;
+    cf_status s = fit_score_at(capture, train, &c->fit, choice->sigma, choice->loss,
+                               choice->loss_scale, &on_train, err);
+    if (s == CF_OK)
+      s = fit_score_at(capture, test, &c->fit, choice->sigma, choice->loss, choice->loss_scale,
+                       &on_test, err);
+    if (s != CF_OK) return s;
+    c->parameters = c->fit.free_unknowns;
+    c->residuals = on_train.residuals;
+    c->cost = on_train.cost;
+    c->bic = 2.0 * on_train.cost + c->parameters * log((double)on_train.residuals);
+    c->heldout_residuals = on_test.residuals;
+    c->heldout_score = sqrt(2.0 * on_test.cost / (double)on_test.residuals);
+    c->heldout_rmse = on_test.used ? sqrt(on_test.e2 / (double)on_test.used) : NAN;
+    c->heldout_relative_rmse = on_test.y2 > 0.0 ? sqrt(on_test.e2 / on_test.y2) : NAN;
+  }
+  return CF_OK;
+}
+
+/* Up the ladder: a richer model replaces the choice only when clearly
+ * better on both scores. */
+static void walk_ladder(cf_fit_choice *choice) {
+  int best = -1;
+  for (int m = 0; m < choice->count; ++m) {
+    cf_fit_candidate *c = &choice->candidate[m];
+    if (!c->ok) continue;
+    if (best < 0) {
+      best = m;
+      snprintf(c->note, sizeof c->note, "the simplest model that could be fitted");
+      continue;
+    }
+    const cf_fit_candidate *b = &choice->candidate[best];
+    const char *code = cf_model_info_get(b->model)->code;
+    double dbic = b->bic - c->bic;
+    double gain = 1.0 - c->heldout_score / b->heldout_score;
+    int better_bic = dbic > choice->bic_margin;
+    int better_test = gain > choice->heldout_margin;
+    if (better_bic && better_test) {
+      snprintf(c->note, sizeof c->note,
+               "clearly better than %s: BIC lower by %.4g, held-out error lower by %.3g %%", code,
+               dbic, 100.0 * gain);
+      best = m;
+    } else {
+      snprintf(c->note, sizeof c->note,
+               "not clearly better than %s: BIC lower by %.4g (needs > %g), held-out error lower "
+               "by %.3g %% (needs > %g %%)",
+               code, dbic, choice->bic_margin, 100.0 * gain, 100.0 * choice->heldout_margin);
+    }
+  }
+  choice->chosen = (cf_model_id)best;
+  choice->candidate[best].chosen = 1;
+}
+
+cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
+                      cf_fit_choice *choice, cf_fit_result *result, cf_error *err) {
+  memset(choice, 0, sizeof *choice);
+  memset(result, 0, sizeof *result);
+  choice->automatic = 1;
+  choice->bic_margin = CF_FIT_CHOICE_BIC_MARGIN;
+  choice->heldout_margin = CF_FIT_CHOICE_HELDOUT_MARGIN;
+  choice->loss = options[0].loss;
+  choice->loss_scale = options[0].loss_scale;
+  if (cf_capture_observations(capture)->count == 0)
+    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+  double clock = now_seconds();
+  int exposures = 0;
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) exposures |= options[m].fit_exposures;
+  choice_split split;
+  cf_status s = split_sample(capture, exposures, &split, choice->heldout, sizeof choice->heldout, err);
+  fit_population train = {split.train, split.train_count}, test = {split.test, split.test_count};
+  choice->train_observations = split.train_count;
+  choice->heldout_observations = split.test_count;
+  if (s == CF_OK) {
+    fit_candidates(capture, options, &train, choice);
+    s = score_candidates(capture, &train, &test, choice, err);
+  }
+  if (s == CF_OK) walk_ladder(choice);
+  split_free(&split);
+  choice->seconds = now_seconds() - clock;
+  if (s != CF_OK) return s;
+
+  /* the chosen model on every observation, from its candidate fit */
+  const cf_fit_candidate *c = &choice->candidate[choice->chosen];
+  cf_fit_options o = options[choice->chosen];
+  o.model = choice->chosen;
+  o.use_start = 1;
+  memcpy(o.start, c->fit.params, sizeof o.start);
+  o.start_scale = c->fit.scale;
+  s = cf_fit_run(capture, &o, result, err);
+  if (s != CF_OK) return s;
+  result->starts = c->fit.starts;
+  memcpy(result->start, c->fit.start, sizeof result->start);
+  result->best_start = c->fit.best_start;
+  result->ambiguous = c->fit.ambiguous;
+  for (int i = 0; i < c->fit.warning_count; ++i) {
+    int dup = 0;
+    for (int j = 0; j < result->warning_count; ++j) dup |= !strcmp(result->warnings[j], c->fit.warnings[i]);
+    if (!dup && result->warning_count < CF_FIT_MAX_WARNINGS)
+      memcpy(result->warnings[result->warning_count++], c->fit.warnings[i], sizeof result->warnings[0]);
+  }
+  return CF_OK;
+}
+
+void cf_fit_choice_free(cf_fit_choice *choice) {
+  for (int m = 0; m < choice->count; ++m)
+    if (choice->candidate[m].ok) cf_fit_result_free(&choice->candidate[m].fit);
+  choice->count = 0;
+}

@@ -1,0 +1,241 @@
+/* fit.json (data_schema/fit.schema.json): a fit's result as a file. */
+#include "fit_json.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+static json_t *numbers(const double *x, int n) {
+  json_t *array = json_array();
+  for (int i = 0; i < n; ++i) json_array_append_new(array, json_real(x[i]));
+  return array;
+}
+
+/* A parameter's value, or its three channels. */
+static json_t *value_of(const double *x, int components) {
+  return components == 3 ? numbers(x, 3) : json_real(x[0]);
+}
+
+/* A standard deviation: null where it is not defined (at a bound). */
+static json_t *sd_number(double sd) { return isfinite(sd) ? json_real(sd) : json_null(); }
+
+static json_t *sd_of(const double *sd, int components) {
+  if (components == 1) return sd_number(sd[0]);
+  json_t *array = json_array();
+  for (int c = 0; c < components; ++c) json_array_append_new(array, sd_number(sd[c]));
+  return array;
+}
+
+/* A parameter's status: one string, or one per channel where they differ. */
+static json_t *status_of(const cf_param_status *status, int components) {
+  int same = 1;
+  for (int c = 1; c < components; ++c) same &= status[c] == status[0];
+  if (same) return json_string(cf_param_status_name(status[0]));
+  json_t *array = json_array();
+  for (int c = 0; c < components; ++c)
+    json_array_append_new(array, json_string(cf_param_status_name(status[c])));
+  return array;
+}
+
+static json_t *params_json(const cf_fit_result *r) {
+  const cf_model_info *m = cf_model_info_get(r->model);
+  json_t *params = json_object();
+  for (int j = 0; j < m->param_count; ++j) {
+    const cf_param_info *info = cf_param_info_get(m->params[j]);
+    int k = m->offsets[j];
+    json_object_set_new(
+        params, info->name,
+        json_pack("{s:o, s:o, s:s, s:o, s:f, s:f, s:s}", "value",
+                  value_of(r->params + k, info->components), "sd",
+                  sd_of(r->sd + k, info->components), "unit", info->unit, "status",
+                  status_of(r->status + k, info->components), "lower", info->lower, "upper",
+                  info->upper, "meaning", info->meaning));
+  }
+  return params;
+}
+
+/* Density and absorption of M4's film under MODEL.md's convention: only
+ * their product τ is observable. */
+static json_t *derived_json(const cf_fit_result *r, double density) {
+  if (r->model != CF_MODEL_CLAY) return json_null();
+  const double *tau = r->params + CF_CLAY_OPTICAL_DEPTH;
+  double mean = (tau[0] + tau[1] + tau[2]) / 3.0;
+  double absorption[3];
+  const char *convention;
+  double d;
+  if (isfinite(density)) {
+    d = density;
+    convention = "density (film thickness) given by the user; absorption = tau / density";
+  } else {
+    d = mean / 0.8;
+    convention = "the photos determine only tau = absorption x density; by MODEL.md's convention "
+                 "the mean absorption over the channels is 0.8, so density = mean(tau) / 0.8";
+  }
+  for (int c = 0; c < 3; ++c) absorption[c] = d > 0.0 ? tau[c] / d : NAN;
+  json_t *out = json_pack("{s:f, s:s}", "density", d, "convention", convention);
+  if (d > 0.0)
+    json_object_set_new(out, "absorption", numbers(absorption, 3));
+  else
+    json_object_set_new(out, "absorption", json_string("undefined: the optical depth is 0"));
+  return out;
+}
+
+static json_t *correlation_json(const cf_fit_result *r) {
+  json_t *names = json_array(), *matrix = json_array();
+  for (int a = 0; a < r->free_count; ++a) {
+    char name[48];
+    json_array_append_new(names, json_string(cf_model_slot_name(r->model, r->free_slots[a], name,
+                                                                sizeof name)));
+    json_array_append_new(matrix, numbers(r->correlation + a * r->free_count, r->free_count));
+  }
+  return json_pack("{s:o, s:o}", "parameters", names, "matrix", matrix);
+}
+
+/* Per slot (an RGB parameter's channels may differ): what was held and
+ * why, the slots the capture does not constrain, the slots at a bound. */
+static json_t *held_json(const cf_fit_result *r, json_t **unconstrained, json_t **at_bound) {
+  const cf_model_info *m = cf_model_info_get(r->model);
+  json_t *held = json_array();
+  *unconstrained = json_array();
+  *at_bound = json_array();
+  for (int k = 0; k < m->dim; ++k) {
+    char name[48];
+    cf_model_slot_name(r->model, k, name, sizeof name);
+    if (r->status[k] == CF_PARAM_FITTED) continue;
+    if (r->status[k] == CF_PARAM_AT_BOUND) {
+      json_array_append_new(*at_bound, json_string(name));
+      continue;
+    }
+    json_array_append_new(held, json_pack("{s:s, s:f, s:s}", "name", name, "value", r->params[k],
+                                          "why", cf_param_status_name(r->status[k])));
+    if (r->status[k] == CF_PARAM_UNCONSTRAINED)
+      json_array_append_new(*unconstrained, json_string(name));
+  }
+  return held;
+}
+
+static json_t *params_by_name(cf_model_id model, const double *x) {
+  const cf_model_info *m = cf_model_info_get(model);
+  json_t *out = json_object();
+  for (int j = 0; j < m->param_count; ++j) {
+    const cf_param_info *info = cf_param_info_get(m->params[j]);
+    json_object_set_new(out, info->name, value_of(x + m->offsets[j], info->components));
+  }
+  return out;
+}
+
+static json_t *number_or_null(double x) { return isfinite(x) ? json_real(x) : json_null(); }
+
+static const char *const loss_names[] = {"none", "huber", "cauchy"};
+
+/* The model choice: the rule, and every candidate's figures. */
+static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
+  if (!choice)
+    return json_pack("{s:s, s:s, s:[]}", "mode", "forced", "chosen",
+                     cf_model_info_get(model)->code, "candidates");
+  json_t *candidates = json_array();
+  for (int m = 0; m < choice->count; ++m) {
+    const cf_fit_candidate *c = &choice->candidate[m];
+    const char *code = cf_model_info_get(c->model)->code;
+    json_t *entry;
+    if (!c->ok) {
+      entry = json_pack("{s:s, s:b, s:b, s:f, s:s}", "model", code, "ok", 0, "chosen", 0,
+                        "seconds", c->seconds, "note", c->note);
+    } else {
+      entry = json_pack(
+          "{s:s, s:b, s:b, s:o, s:i, s:I, s:f, s:f, s:I, s:o, s:o, s:o, s:f, s:f, s:f, s:s}",
+          "model", code, "ok", 1, "chosen", c->chosen, "params", params_json(&c->fit),
+          "unknowns", c->parameters, "residuals", (json_int_t)c->residuals, "cost", c->cost,
+          "bic", c->bic, "heldout_residuals", (json_int_t)c->heldout_residuals, "heldout_score",
+          number_or_null(c->heldout_score), "heldout_rmse", number_or_null(c->heldout_rmse),
+          "heldout_relative_rmse", number_or_null(c->heldout_relative_rmse), "train_rmse",
+          c->fit.rmse, "train_relative_rmse", c->fit.relative_rmse, "seconds", c->seconds,
+          "note", c->note);
+    }
+    json_array_append_new(candidates, entry);
+  }
+  return json_pack(
+      "{s:s, s:s, s:I, s:I, s:s, s:f, s:{s:s, s:f}, s:f, s:f, s:f, s:s, s:o}", "mode", "auto",
+      "chosen", cf_model_info_get(choice->chosen)->code, "train_observations",
+      (json_int_t)choice->train_observations, "heldout_observations",
+      (json_int_t)choice->heldout_observations, "heldout", choice->heldout, "sigma",
+      choice->sigma, "loss", "type", loss_names[choice->loss], "scale_sigma", choice->loss_scale,
+      "bic_margin", choice->bic_margin, "heldout_margin", choice->heldout_margin, "seconds",
+      choice->seconds, "rule",
+      "each model fitted to the training part; BIC = 2 cost + unknowns ln(residuals) there, "
+      "cost = 1/2 sum rho(r^2) at the common sigma; heldout_score = sqrt(mean rho(r^2)) on the "
+      "held-out part, in sigma; going up the ladder a richer model replaces the choice only "
+      "when its BIC is lower by more than bic_margin and its held-out score lower by more than "
+      "heldout_margin (relative)",
+      "candidates", candidates);
+}
+
+cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error *err) {
+  const cf_fit_result *r = rep->result;
+  const cf_model_info *m = cf_model_info_get(r->model);
+  cf_capture_summary summary;
+  cf_capture_summarize(rep->capture, &summary);
+  const cf_observations *obs = cf_capture_observations(rep->capture);
+  char created[32];
+  time_t now = time(NULL);
+  struct tm utc;
+  gmtime_r(&now, &utc);
+  strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &utc);
+
+  json_t *unconstrained, *at_bound;
+  json_t *held = held_json(r, &unconstrained, &at_bound);
+  json_t *per_image = json_array();
+  for (size_t k = 0; k < r->images; ++k)
+    json_array_append_new(
+        per_image, json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
+                             "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k],
+                             "exposure", r->exposures[k]));
+  json_t *starts = json_array();
+  for (int i = 0; i < r->starts; ++i)
+    json_array_append_new(starts, json_pack("{s:o, s:o, s:f, s:i}", "start",
+                                            params_by_name(r->model, r->start[i].start), "end",
+                                            params_by_name(r->model, r->start[i].end), "cost",
+                                            r->start[i].cost, "iterations", r->start[i].iterations));
+  json_t *stages = json_object();
+  for (int i = 0; i < CF_FIT_STAGE_COUNT; ++i)
+    json_object_set_new(stages, cf_fit_stage_name((cf_fit_stage)i), json_real(r->stage_seconds[i]));
+  json_t *warnings = json_array();
+  for (int i = 0; i < r->warning_count; ++i)
+    json_array_append_new(warnings, json_string(r->warnings[i]));
+  json_t *cores = json_pack(
+      "{s:f, s:I, s:f, s:f, s:{s:I, s:f, s:f}, s:s}", "radius_px", CF_FIT_CORE_RADIUS_PX, "count",
+      (json_int_t)r->core_residuals, "rmse", r->core_rmse, "relative_rmse", r->core_relative_rmse,
+      "rest", "count", (json_int_t)(r->residuals - r->core_residuals), "rmse", r->rest_rmse,
+      "relative_rmse", r->rest_relative_rmse, "meaning",
+      "residuals within radius_px of each image's brightest observation (the highlight's core, "
+      "where the lobe's shape shows) and of all the others");
+  json_t *doc = json_pack(
+      "{s:i, s:s, s:s, s:{s:s, s:s, s:I, s:I, s:s}, s:{s:s, s:s}, s:o, s:o, s:{s:f, s:f, s:b}, "
+      "s:o, s:o, s:o, s:o, s:{s:s, s:f}, s:{s:s, s:f}, s:{s:I, s:I, s:I, s:f, s:f, s:o, s:o}, "
+      "s:{s:i, s:i, s:s, s:f, s:f}, s:o, s:i, s:o, s:{s:f, s:f, s:f, s:o}}",
+      "clayfit_fit", 1, "clayfit_version", rep->version, "created", created, "capture", "path",
+      rep->capture_path, "name", summary.name, "images", (json_int_t)r->images, "observations",
+      (json_int_t)obs->count, "radiometry", summary.radiometry_relative ? "relative" : "absolute",
+      "model", "code", m->code, "name", m->name, "params", params_json(r), "derived",
+      derived_json(r, rep->density), "scale", "value", r->scale, "sd", r->scale_sd, "fitted",
+      r->scale_fitted, "correlation", correlation_json(r), "held", held, "not_constrained",
+      unconstrained, "at_bound", at_bound, "noise", "model", r->sigma > 0.0 ? "estimated from the residuals" : "capture",
+      "sigma", r->sigma, "loss", "type",
+      loss_names[rep->loss], "scale_sigma", rep->loss_scale, "residuals", "count",
+      (json_int_t)r->residuals, "censored", (json_int_t)r->censored, "rejected",
+      (json_int_t)r->rejected, "rmse", r->rmse, "relative_rmse", r->relative_rmse, "per_image",
+      per_image, "highlight_cores", cores, "solver", "iterations", r->iterations, "solves", r->solves, "termination", r->termination, "seconds",
+      r->solve_seconds, "final_cost", r->cost, "starts", starts, "best_start", r->best_start,
+      "warnings", warnings, "timing", "load_s", rep->load_seconds, "fit_s", rep->fit_seconds,
+      "total_s", rep->load_seconds + rep->fit_seconds, "stages", stages);
+  if (doc) json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
+  if (doc)
+    json_object_set_new(json_object_get(doc, "timing"), "choice_s",
+                        json_real(rep->choice ? rep->choice->seconds : 0.0));
+  if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build fit.json");
+  int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0;
+  json_decref(doc);
+  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+}

@@ -1,0 +1,213 @@
+/* The start of a fit (fit_multistart.h). */
+#include "fit_multistart.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fit_residuals.h"
+#include "fit_starts.h"
+#include "lsq.h"
+#include "order_statistics.h"
+
+/* Every start runs to convergence (START_ITERATIONS at most) on a
+ * subsample of about SUBSAMPLE_TARGET observations spread over the
+ * images. */
+enum { SUBSAMPLE_TARGET = 4000, START_ITERATIONS = 300 };
+
+/* ρ per channel of a Lambertian fit to the least specular half of the
+ * observations (those whose half vector is farthest from the normal). */
+static void lambert_albedo(const fit_problem *p, double rho[3]) {
+  size_t n = p->count;
+  double *specularity = malloc(n * sizeof *specularity), *sorted = malloc(n * sizeof *sorted);
+  rho[0] = rho[1] = rho[2] = 0.5;
+  if (!specularity || !sorted || n == 0) {
+    free(specularity);
+    free(sorted);
+    return;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    double most = 0.0;
+    for (int j = 0; j < p->lights; ++j) {
+      const cf_geometry *g = &p->geometry[i * (size_t)p->lights + (size_t)j];
+      if (cf_geometry_is_lit(g)) most = fmax(most, g->cos2_h);
+    }
+    specularity[i] = sorted[i] = most;
+  }
+  double threshold = fit_kth_smallest(sorted, n, n / 2); /* the median */
+  double num[3] = {0}, den[3] = {0};
+  for (size_t i = 0; i < n; ++i) {
+    if (specularity[i] > threshold) continue;
+    size_t k = p->index ? p->index[i] : i;
+    for (int c = 0; c < 3; ++c) {
+      double q = 0.0; /* the Lambertian prediction with ρ = 1 */
+      for (int j = 0; j < p->lights; ++j)
+        q += p->weight[3 * (i * (size_t)p->lights + (size_t)j) + (size_t)c] / 3.14159265358979;
+      num[c] += p->obs->rgb[3 * k + (size_t)c] * q;
+      den[c] += q * q;
+    }
+  }
+  for (int c = 0; c < 3; ++c) rho[c] = den[c] > 0.0 ? num[c] / den[c] : 0.5;
+  free(specularity);
+  free(sorted);
+}
+
+/* The base start: the albedo (and, with a free scale, the scale that puts
+ * the albedo inside [0, 1]); held slots at their held values. */
+static void base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
+                       double *params, double *log_scale) {
+  const cf_model_info *m = cf_model_info_get(p->model);
+  cf_model_default_params(p->model, params);
+  for (int k = 0; k < m->dim; ++k)
+    if (plan->status[k] != CF_PARAM_FITTED && o->hold[k]) params[k] = o->hold_value[k];
+  int sk = fit_scale_slot(p->model);
+  if (sk >= 0 && plan->status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk]) params[sk] = FIT_SCALE_F0;
+  double rho[3];
+  lambert_albedo(p, rho);
+  double largest = fmax(rho[0], fmax(rho[1], rho[2]));
+  *log_scale = 0.0;
+  if (plan->scale && largest > 0.0) {
+    *log_scale = log(largest / 0.5);
+    for (int c = 0; c < 3; ++c) rho[c] /= largest / 0.5;
+  }
+  for (int c = 0; c < 3; ++c) /* a start inside the bounds */
+    if (plan->status[c] == CF_PARAM_FITTED) params[c] = fmin(0.98, fmax(0.02, rho[c]));
+}
+
+/* Run `count` starts of `model` on the problem to convergence; the best is
+ * r->start[r->best_start]. */
+static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit_plan *plan,
+                            double (*starts)[CF_MAX_DIM], int count, double log_scale,
+                            cf_fit_result *r, double *log_scales, cf_error *err) {
+  cf_status s = fit_declare(sub, plan, err);
+  r->starts = 0;
+  r->best_start = 0;
+  for (int i = 0; s == CF_OK && i < count; ++i) {
+    fit_progress(o, "multi-start", (size_t)i, (size_t)count);
+    memcpy(sub->params, starts[i], sizeof starts[i]);
+    sub->log_scale = log_scale;
+    cf_lsq_summary summary;
+    s = fit_solve(sub, o, START_ITERATIONS, &summary, err);
+    if (s != CF_OK) break;
+    cf_fit_start *start = &r->start[r->starts++];
+    memcpy(start->start, starts[i], sizeof starts[i]);
+    memcpy(start->end, sub->params, sizeof sub->params);
+    start->cost = summary.final_cost;
+    start->iterations = summary.iterations;
+    log_scales[i] = sub->log_scale;
+    if (start->cost < r->start[r->best_start].cost) r->best_start = i;
+  }
+  fit_progress(o, "multi-start", (size_t)count, (size_t)count);
+  return s;
+}
+
+/* M2's fit on the subsample, for the warm starts of M3 and M4. */
+static cf_status warm_dielectric(const cf_capture *capture, const cf_fit_options *o,
+                                 const fit_sample *sample, double *m2, cf_error *err) {
+  cf_fit_options o2 = *o;
+  memset(o2.hold, 0, sizeof o2.hold);
+  memset(o2.free, 0, sizeof o2.free);
+  o2.model = CF_MODEL_DIELECTRIC;
+  fit_plan plan;
+  fit_plan_for(capture, &o2, &plan);
+  fit_problem sub;
+  cf_status s = fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index,
+                                 sample->count, err);
+  if (s != CF_OK) return s;
+  s = fit_problem_set_sample_weights(&sub, sample->weight, err);
+  double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM], log_scales[CF_FIT_MAX_STARTS];
+  base_start(&sub, &plan, &o2, base, &log_scale);
+  int held[CF_MAX_DIM];
+  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan.status[k] != CF_PARAM_FITTED;
+  int count = fit_starts(CF_MODEL_DIELECTRIC, base, held, NULL, starts, CF_FIT_MAX_STARTS);
+  cf_fit_result *r = s == CF_OK ? calloc(1, sizeof *r) : NULL;
+  if (s == CF_OK) s = r ? run_starts(&sub, &o2, &plan, starts, count, log_scale, r, log_scales, err)
+        : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) memcpy(m2, r->start[r->best_start].end, sizeof r->start[0].end);
+  free(r);
+  fit_problem_release(&sub);
+  return s;
+}
+
+/* The multi-start on a subsample; returns the best start's values and σ
+ * estimated there. */
+cf_status fit_multistart(const cf_capture *capture, const fit_population *population,
+                         const cf_fit_options *o, const fit_plan *plan, cf_fit_result *r,
+                         double *best_params, double *best_log_scale, double *sigma,
+                         cf_error *err) {
+  fit_sample sample;
+  fit_problem sub;
+  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population,
+                                        SUBSAMPLE_TARGET, err);
+  if (s != CF_OK) return s;
+  double base[CF_MAX_DIM], log_scale;
+  base_start(&sub, plan, o, base, &log_scale);
+  int held[CF_MAX_DIM];
+  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan->status[k] != CF_PARAM_FITTED;
+  /* M3 and M4 start from the fitted M2 */
+  double m2[CF_MAX_DIM];
+  int warm = o->multistart && (o->model == CF_MODEL_CLAY || o->model == CF_MODEL_CLEARCOAT);
+  if (warm && s == CF_OK) s = warm_dielectric(capture, o, &sample, m2, err);
+  double starts[CF_FIT_MAX_STARTS][CF_MAX_DIM], log_scales[CF_FIT_MAX_STARTS];
+  int count = s == CF_OK && o->multistart
+                  ? fit_starts(o->model, base, held, warm ? m2 : NULL, starts, CF_FIT_MAX_STARTS)
+                  : 0;
+  if (count == 0) { /* no multi-start: the base alone */
+    memcpy(starts[0], base, sizeof base);
+    count = 1;
+  }
+  if (s == CF_OK)
+    s = run_starts(&sub, o, plan, starts, count, log_scale, r, log_scales, err);
+  if (s == CF_OK) {
+    memcpy(best_params, r->start[r->best_start].end, sizeof r->start[0].end);
+    *best_log_scale = log_scales[r->best_start];
+  }
+  /* σ from the residuals at the best start (when the capture has no noise
+   * model): the subsample's are as good an estimate as all of them */
+  if (s == CF_OK) {
+    memcpy(sub.params, best_params, sizeof sub.params);
+    sub.log_scale = *best_log_scale;
+    s = fit_estimate_sigma(&sub, sigma, err);
+  }
+  fit_problem_release(&sub);
+  fit_sample_free(&sample);
+  return s;
+}
+
+cf_status fit_start_sigma(const cf_capture *capture, const fit_population *population,
+                          const cf_fit_options *o, const double *params, double log_scale,
+                          double *sigma, cf_error *err) {
+  fit_sample sample;
+  fit_problem sub;
+  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population,
+                                        SUBSAMPLE_TARGET, err);
+  if (s != CF_OK) return s;
+  memcpy(sub.params, params, sizeof sub.params);
+  sub.log_scale = log_scale;
+  s = fit_estimate_sigma(&sub, sigma, err);
+  fit_problem_release(&sub);
+  fit_sample_free(&sample);
+  return s;
+}
+
+/* Two starts that end far apart (in units of each parameter's range) with
+ * costs within the noise of each other (Δcost < 1 in units of σ², that is
+ * Δχ² < 2) make the fit ambiguous. */
+int fit_ambiguous(const cf_fit_result *r, cf_model_id model, double sigma2) {
+  const cf_model_info *m = cf_model_info_get(model);
+  for (int a = 0; a < r->starts; ++a)
+    for (int b = a + 1; b < r->starts; ++b) {
+      if (fabs(r->start[a].cost - r->start[b].cost) / sigma2 >= 1.0) continue;
+      double distance = 0.0;
+      for (int j = 0; j < m->param_count; ++j) {
+        const cf_param_info *info = cf_param_info_get(m->params[j]);
+        for (int c = 0; c < info->components; ++c) {
+          int k = m->offsets[j] + c;
+          double d = (r->start[a].end[k] - r->start[b].end[k]) / (info->upper - info->lower);
+          distance = fmax(distance, fabs(d));
+        }
+      }
+      if (distance > 0.05) return 1;
+    }
+  return 0;
+}

@@ -1,0 +1,32 @@
+/* The start of a fit that needs no guess: the closed-form albedo of the
+ * least specular observations, then the deterministic multi-start
+ * (fit_starts.h) run to convergence on a subsample; M3 and M4 build their
+ * starts on a fitted M2. Private to src/fit. */
+#ifndef CLAYFIT_FIT_MULTISTART_H
+#define CLAYFIT_FIT_MULTISTART_H
+
+#include "clayfit/capture.h"
+#include "clayfit/fit.h"
+#include "fit_plan.h"
+
+/* Runs the starts on a subsample of the population (recorded in r->start;
+ * the best is r->best_start) and returns the best start's values, its log
+ * scale, and σ estimated from its residuals (used when the capture has no
+ * noise model). */
+cf_status fit_multistart(const cf_capture *capture, const fit_population *population,
+                         const cf_fit_options *o, const fit_plan *plan, cf_fit_result *r,
+                         double *best_params, double *best_log_scale, double *sigma,
+                         cf_error *err);
+
+/* σ estimated from the residuals at a given start (the start given in the
+ * options instead of the multi-start), on a subsample of the population. */
+cf_status fit_start_sigma(const cf_capture *capture, const fit_population *population,
+                          const cf_fit_options *o, const double *params, double log_scale,
+                          double *sigma, cf_error *err);
+
+/* Did two starts that ended far apart (more than 5 % of a parameter's
+ * range) end within the noise of each other (Δcost < 1 in units of σ²,
+ * that is Δχ² < 2)? */
+int fit_ambiguous(const cf_fit_result *r, cf_model_id model, double sigma2);
+
+#endif /* CLAYFIT_FIT_MULTISTART_H */

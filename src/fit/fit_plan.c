@@ -1,0 +1,105 @@
+/* What a fit frees and holds, and the solver calls of every stage
+ * (fit_plan.h). */
+#include "fit_plan.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "lsq.h"
+
+/* The interface F0 that fixes the absolute scale of a capture whose lights
+ * are known only up to a factor (MODEL.md, "relative radiometry"), or −1. */
+int fit_scale_slot(cf_model_id model) {
+  switch (model) {
+    case CF_MODEL_DIELECTRIC: return CF_DIELECTRIC_F0;
+    case CF_MODEL_CLEARCOAT: return CF_CLEARCOAT_F0;
+    case CF_MODEL_CLAY: return CF_CLAY_FILM_F0;
+    default: return -1;
+  }
+}
+
+cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_plan *plan) {
+  const cf_model_info *m = cf_model_info_get(o->model);
+  cf_capture_summary summary;
+  cf_capture_summarize(capture, &summary);
+  memset(plan, 0, sizeof *plan);
+  for (int k = 0; k < m->dim; ++k) plan->status[k] = o->hold[k] ? CF_PARAM_HELD : CF_PARAM_FITTED;
+  int sk = fit_scale_slot(o->model);
+  if (summary.radiometry_relative && sk >= 0) {
+    /* the scale is fitted, fixed by the interface F0 (held, 0.04 unless the
+     * user says otherwise) */
+    plan->scale = 1;
+    if (!o->free[sk] && !o->hold[sk]) plan->status[sk] = CF_PARAM_HELD_FOR_SCALE;
+  }
+  plan->exposures = o->fit_exposures && cf_capture_image_count(capture) > 1;
+  return CF_OK;
+}
+
+cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
+  fit_problem_clear_unknowns(p);
+  for (int k = 0; k < p->dim; ++k)
+    if (plan->status[k] == CF_PARAM_FITTED) fit_problem_free_slot(p, k);
+  if (plan->scale) fit_problem_free_scale(p);
+  if (plan->exposures) fit_problem_free_exposures(p);
+  return fit_problem_finish(p, err);
+}
+
+cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
+                       cf_lsq_summary *summary, cf_error *err) {
+  double x[FIT_MAX_FREE];
+  fit_problem_get_x(p, x);
+  cf_lsq_problem problem = {p->num_unknowns,          x,
+                            p->lower,                  p->upper,
+                            p->num_blocks,             p->block_residuals,
+                            fit_problem_evaluate,      fit_problem_block_columns,
+                            p,                         p->at_bound};
+  cf_lsq_options options;
+  cf_lsq_default_options(&options);
+  options.max_iterations = max_iterations;
+  options.threads = o->threads > 0 ? o->threads : 2;
+  cf_status s = cf_lsq_solve(&problem, &options, summary, err);
+  if (s == CF_OK) fit_problem_set_x(p, x);
+  if (s == CF_OK) {
+    ++p->solves;
+    p->iterations += summary->iterations;
+    p->solver_seconds += summary->seconds;
+  }
+  return s;
+}
+
+/* With a noise model, σ from the prediction (fit_problem_reweight) and
+ * solve again, to the fixed point (the largest change in a model slot
+ * below 1e-7 of its range's width, or `rounds` rounds); without one, one
+ * solve. */
+cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture,
+                                  const cf_fit_options *o, int rounds, cf_lsq_summary *summary,
+                                  cf_error *err) {
+  if (!fit_capture_has_noise(capture)) return fit_solve(p, o, o->max_iterations, summary, err);
+  cf_status s = CF_OK;
+  for (int round = 0; s == CF_OK && round < rounds; ++round) {
+    double before[CF_MAX_DIM];
+    memcpy(before, p->params, sizeof before);
+    s = fit_problem_reweight(p, capture, err);
+    if (s == CF_OK) s = fit_solve(p, o, o->max_iterations, summary, err);
+    double change = 0.0;
+    for (int k = 0; k < p->dim; ++k)
+      change = fmax(change, fabs(p->params[k] - before[k]) / fit_slot_width(p, k));
+    if (change < 1e-7) break;
+  }
+  return s;
+}
+
+/* The width of a model slot's range. */
+double fit_slot_width(const fit_problem *p, int slot) {
+  const cf_model_info *m = cf_model_info_get(p->model);
+  for (int j = m->param_count - 1; j >= 0; --j)
+    if (slot >= m->offsets[j]) {
+      const cf_param_info *info = cf_param_info_get(m->params[j]);
+      return info->upper - info->lower;
+    }
+  return 1.0;
+}
+
+void fit_progress(const cf_fit_options *o, const char *stage, size_t done, size_t total) {
+  if (o->progress) o->progress(o->progress_user, stage, done, total);
+}

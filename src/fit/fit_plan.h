@@ -1,0 +1,51 @@
+/* What a fit frees and holds, and the solver calls every stage of the fit
+ * makes (lsq.h over fit_problem.h). Private to src/fit. */
+#ifndef CLAYFIT_FIT_PLAN_H
+#define CLAYFIT_FIT_PLAN_H
+
+#include <stddef.h>
+
+#include "clayfit/capture.h"
+#include "clayfit/fit.h"
+#include "fit_problem.h"
+#include "lsq.h"
+
+/* What is free: per model slot its status (CF_PARAM_FITTED: free), and
+ * whether the global scale and the exposures are. */
+typedef struct fit_plan {
+  cf_param_status status[CF_MAX_DIM];
+  int scale, exposures;
+} fit_plan;
+
+/* The interface F0 that fixes the absolute scale of a capture whose lights
+ * are known only up to a factor (MODEL.md, "relative radiometry"), or −1
+ * for a model without one. */
+int fit_scale_slot(cf_model_id model);
+
+/* The value that slot is held at for the scale unless the user holds
+ * another (MODEL.md: F0 = 0.04, an uncoated dielectric of IOR 1.5). */
+#define FIT_SCALE_F0 0.04
+
+/* The plan for the options' model on this capture. */
+cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_plan *plan);
+
+/* Declare the plan's unknowns on the problem. */
+cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err);
+
+/* Solve the problem from its current values (lsq.h); the solution becomes
+ * the current values, p->at_bound says which unknowns ended at a bound. */
+cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
+                    cf_lsq_summary *summary, cf_error *err);
+
+/* With a noise model, σ from the prediction (fit_problem_reweight) and
+ * solve again, to the fixed point or `rounds` rounds; without one, one
+ * solve. */
+cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
+                               int rounds, cf_lsq_summary *summary, cf_error *err);
+
+/* The width of a model slot's range. */
+double fit_slot_width(const fit_problem *p, int slot);
+
+void fit_progress(const cf_fit_options *o, const char *stage, size_t done, size_t total);
+
+#endif /* CLAYFIT_FIT_PLAN_H */

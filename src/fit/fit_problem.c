@@ -1,0 +1,489 @@
+/* The fit's least-squares problem (fit_problem.h). */
+#include "fit_problem.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "order_statistics.h"
+
+enum { BLOCK_SIZE = 1024 };
+
+static size_t observation(const fit_problem *p, size_t i) {
+  return p->index ? p->index[i] : i;
+}
+
+/* How near an observation's half vector comes to its normal, for any lit
+ * light: max_j n·normalize(l_j + v). */
+static double specularity(const cf_observations *obs, size_t k) {
+  const double *n = obs->normal + 3 * k, *v = obs->view + 3 * k;
+  double best = -1.0;
+  for (int j = 0; j < obs->lights; ++j) {
+    size_t slot = k * (size_t)obs->lights + (size_t)j;
+    const double *l = obs->light_dir + 3 * slot, *e = obs->irradiance + 3 * slot;
+    if (e[0] + e[1] + e[2] <= 0.0 || n[0] * l[0] + n[1] * l[1] + n[2] * l[2] <= 0.0) continue;
+    double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
+    double length = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    if (length > 0.0) best = fmax(best, (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / length);
+  }
+  return best;
+}
+
+void fit_sample_free(fit_sample *sample) {
+  free(sample->index);
+  free(sample->weight);
+  memset(sample, 0, sizeof *sample);
+}
+
+cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from, size_t target,
+                          fit_sample *sample, cf_error *err) {
+  memset(sample, 0, sizeof *sample);
+  size_t n = from->count;
+  size_t capacity = n <= target ? n : target + 2;
+  sample->index = malloc((capacity ? capacity : 1) * sizeof *sample->index);
+  sample->weight = malloc((capacity ? capacity : 1) * sizeof *sample->weight);
+  double *score = n > target ? malloc(n * sizeof *score) : NULL;
+  double *sorted = n > target ? malloc(n * sizeof *sorted) : NULL;
+  if (!sample->index || !sample->weight || (n > target && (!score || !sorted))) {
+    free(score);
+    free(sorted);
+    fit_sample_free(sample);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for a sample of %zu observations", target);
+  }
+  if (n <= target) { /* the whole population */
+    for (size_t i = 0; i < n; ++i) {
+      sample->index[i] = from->index ? from->index[i] : (uint32_t)i;
+      sample->weight[i] = 1.0;
+    }
+    sample->count = n;
+    return CF_OK;
+  }
+  for (size_t i = 0; i < n; ++i)
+    score[i] = sorted[i] = specularity(obs, from->index ? from->index[i] : i);
+  double threshold = fit_kth_smallest(sorted, n, n - n / 16);
+  size_t specular = 0;
+  for (size_t i = 0; i < n; ++i) specular += score[i] >= threshold;
+  /* per stratum: how many to take, every stride-th */
+  size_t want[2] = {target / 4, target - target / 4}, size[2] = {specular, n - specular};
+  size_t stride[2], taken[2] = {0, 0}, seen[2] = {0, 0};
+  for (int t = 0; t < 2; ++t) {
+    stride[t] = want[t] > 0 && size[t] > want[t] ? size[t] / want[t] : 1;
+  }
+  size_t m = 0;
+  for (size_t i = 0; i < n && m < capacity; ++i) {
+    int t = score[i] >= threshold ? 0 : 1;
+    if (seen[t]++ % stride[t] != 0 || taken[t] >= want[t] + 1) continue;
+    sample->index[m] = from->index ? from->index[i] : (uint32_t)i;
+    sample->weight[m] = (double)t; /* the stratum, for now */
+    ++taken[t];
+    ++m;
+  }
+  for (size_t i = 0; i < m; ++i) {
+    int t = (int)sample->weight[i];
+    sample->weight[i] = (double)size[t] / (double)taken[t];
+  }
+  sample->count = m;
+  free(score);
+  free(sorted);
+  return CF_OK;
+}
+
+cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, cf_error *err) {
+  free(p->sample_root);
+  p->sample_root = malloc((p->count ? p->count : 1) * sizeof *p->sample_root);
+  if (!p->sample_root) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = sqrt(weight[i]);
+  return CF_OK;
+}
+
+cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_id model,
+                           const uint32_t *index, size_t count, cf_error *err) {
+  memset(p, 0, sizeof *p);
+  p->obs = cf_capture_observations(capture);
+  p->model = model;
+  p->dim = cf_model_info_get(model)->dim;
+  p->lights = p->obs->lights;
+  p->index = index;
+  p->count = index ? count : p->obs->count;
+  p->images = cf_capture_image_count(capture);
+  p->last_image = (uint32_t)(p->images - 1);
+  p->loss = CF_LOSS_NONE;
+  p->loss_scale = 3.0;
+  p->block_size = BLOCK_SIZE;
+  cf_model_default_params(model, p->params);
+  size_t pairs = p->count * (size_t)p->lights;
+  p->geometry = malloc(pairs * sizeof *p->geometry);
+  p->weight = malloc(3 * pairs * sizeof *p->weight);
+  p->inv_sigma = malloc(3 * p->count * sizeof *p->inv_sigma);
+  p->log_exposures = calloc(p->images, sizeof *p->log_exposures);
+  if (!p->geometry || !p->weight || !p->inv_sigma || !p->log_exposures) {
+    fit_problem_release(p);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", p->count);
+  }
+  /* the geometry of every (observation, light) pair, and E c_i */
+  const cf_observations *o = p->obs;
+  for (size_t i = 0; i < p->count; ++i) {
+    size_t k = observation(p, i);
+    for (int j = 0; j < p->lights; ++j) {
+      size_t pair = i * (size_t)p->lights + (size_t)j, slot = k * (size_t)p->lights + (size_t)j;
+      const double *l = o->light_dir + 3 * slot, *e = o->irradiance + 3 * slot;
+      p->geometry[pair] = cf_geometry_from_directions(o->normal + 3 * k, l, o->view + 3 * k);
+      double cos_i = cf_geometry_is_lit(&p->geometry[pair]) ? p->geometry[pair].cos_i : 0.0;
+      for (int c = 0; c < 3; ++c) p->weight[3 * pair + (size_t)c] = e[c] * cos_i;
+    }
+  }
+  fit_problem_set_sigma(p, capture, 1.0);
+  return CF_OK;
+}
+
+void fit_problem_release(fit_problem *p) {
+  free(p->geometry);
+  free(p->weight);
+  free(p->inv_sigma);
+  free(p->log_exposures);
+  free(p->block_residuals);
+  free(p->sample_root);
+  memset(p, 0, sizeof *p);
+}
+
+/* Does the capture give a noise model with some noise in it? */
+static int capture_noise(const cf_capture *capture, double *read, double *shot) {
+  cf_capture_summary summary;
+  cf_capture_summarize(capture, &summary);
+  *read = summary.noise_read;
+  *shot = summary.noise_shot;
+  return summary.has_noise && (summary.noise_read > 0.0 || summary.noise_shot > 0.0);
+}
+
+int fit_capture_has_noise(const cf_capture *capture) {
+  double read, shot;
+  return capture_noise(capture, &read, &shot);
+}
+
+void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma) {
+  double read, shot;
+  int noise = capture_noise(capture, &read, &shot);
+  p->sigma = noise ? 0.0 : sigma;
+  /* the noise model's variance, floored at its smallest positive value (a
+   * dark pixel with no read noise would otherwise weigh infinitely) */
+  double floor = noise && read > 0.0 ? read * read : HUGE_VAL;
+  for (size_t i = 0; noise && read == 0.0 && i < p->count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      double y = p->obs->rgb[3 * observation(p, i) + (size_t)c];
+      if (shot * y > 0.0) floor = fmin(floor, shot * y);
+    }
+  for (size_t i = 0; i < p->count; ++i) {
+    const double *y = p->obs->rgb + 3 * observation(p, i);
+    for (int c = 0; c < 3; ++c) {
+      double variance = noise ? fmax(read * read + shot * fmax(y[c], 0.0), floor) : sigma * sigma;
+      p->inv_sigma[3 * i + (size_t)c] = 1.0 / sqrt(variance);
+    }
+  }
+}
+
+cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_error *err) {
+  double read, shot;
+  if (!capture_noise(capture, &read, &shot)) return CF_OK;
+  size_t n = 3 * p->count;
+  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
+  cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
+                                       : cf_error_set(err, CF_ENOMEM, "out of memory");
+  /* floored like fit_problem_set_sigma: the smallest positive variance */
+  double floor = read > 0.0 ? read * read : HUGE_VAL;
+  for (size_t i = 0; s == CF_OK && read == 0.0 && i < n; ++i)
+    if (shot * prediction[i] > 0.0) floor = fmin(floor, shot * prediction[i]);
+  for (size_t i = 0; s == CF_OK && i < n; ++i)
+    p->inv_sigma[i] = 1.0 / sqrt(fmax(read * read + shot * fmax(prediction[i], 0.0), floor));
+  free(prediction);
+  free(measured);
+  return s;
+}
+
+/* ---- unknowns ---- */
+
+void fit_problem_clear_unknowns(fit_problem *p) {
+  p->num_unknowns = 0;
+  memset(p->at_bound, 0, sizeof p->at_bound);
+}
+
+static void add_unknown(fit_problem *p, fit_unknown_kind kind, int slot, double lo, double hi) {
+  int i = p->num_unknowns++;
+  p->unknowns[i] = (fit_unknown){kind, slot};
+  p->lower[i] = lo;
+  p->upper[i] = hi;
+}
+
+void fit_problem_free_slot(fit_problem *p, int slot) {
+  const cf_model_info *m = cf_model_info_get(p->model);
+  for (int j = m->param_count - 1; j >= 0; --j)
+    if (slot >= m->offsets[j]) {
+      const cf_param_info *info = cf_param_info_get(m->params[j]);
+      if (info->id == CF_PARAM_ALBEDO) {
+        add_unknown(p, FIT_LOG_SLOT, slot, -HUGE_VAL, log(info->upper));
+        return;
+      }
+      if (info->id == CF_PARAM_DIFFUSE_ROUGHNESS) {
+        add_unknown(p, FIT_SQUARE_SLOT, slot, info->lower * info->lower, info->upper * info->upper);
+        return;
+      }
+      add_unknown(p, FIT_MODEL_SLOT, slot, info->lower, info->upper);
+      return;
+    }
+}
+
+void fit_problem_free_scale(fit_problem *p) { add_unknown(p, FIT_LOG_SCALE, 0, -HUGE_VAL, HUGE_VAL); }
+
+void fit_problem_free_exposures(fit_problem *p) {
+  for (size_t k = 0; k + 1 < p->images; ++k)
+    add_unknown(p, FIT_LOG_EXPOSURE, (int)k, -HUGE_VAL, HUGE_VAL);
+}
+
+cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
+  p->num_blocks = (p->count + p->block_size - 1) / p->block_size;
+  free(p->block_residuals);
+  p->block_residuals = malloc((p->num_blocks ? p->num_blocks : 1) * sizeof *p->block_residuals);
+  if (!p->block_residuals) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t b = 0; b < p->num_blocks; ++b) {
+    size_t n = p->count - b * p->block_size;
+    p->block_residuals[b] = (int)(3 * (n < p->block_size ? n : p->block_size));
+  }
+  return CF_OK;
+}
+
+void fit_problem_get_x(const fit_problem *p, double *x) {
+  for (int i = 0; i < p->num_unknowns; ++i) {
+    const fit_unknown *u = &p->unknowns[i];
+    x[i] = u->kind == FIT_MODEL_SLOT ? p->params[u->slot]
+           : u->kind == FIT_LOG_SLOT  ? log(p->params[u->slot])
+           : u->kind == FIT_SQUARE_SLOT ? p->params[u->slot] * p->params[u->slot]
+           : u->kind == FIT_LOG_SCALE ? p->log_scale
+                                      : p->log_exposures[u->slot];
+  }
+}
+
+/* The values x stands for: params, log s, log e_k (the last image's from
+ * the others). */
+static void values_at(const fit_problem *p, const double *x, double *params, double *log_scale,
+                      double *log_exposures) {
+  memcpy(params, p->params, sizeof p->params);
+  *log_scale = p->log_scale;
+  if (log_exposures) memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
+  int exposures_free = 0;
+  for (int i = 0; i < p->num_unknowns; ++i) {
+    const fit_unknown *u = &p->unknowns[i];
+    if (u->kind == FIT_MODEL_SLOT) params[u->slot] = x[i];
+    else if (u->kind == FIT_LOG_SLOT) params[u->slot] = exp(x[i]);
+    else if (u->kind == FIT_SQUARE_SLOT) params[u->slot] = sqrt(fmax(x[i], 0.0));
+    else if (u->kind == FIT_LOG_SCALE) *log_scale = x[i];
+    else if (log_exposures) log_exposures[u->slot] = x[i], exposures_free = 1;
+  }
+  if (exposures_free) {
+    double sum = 0.0;
+    for (size_t k = 0; k + 1 < p->images; ++k) sum += log_exposures[k];
+    log_exposures[p->last_image] = -sum;
+  }
+}
+
+void fit_problem_set_x(fit_problem *p, const double *x) {
+  double params[CF_MAX_DIM], log_scale;
+  values_at(p, x, params, &log_scale, p->log_exposures);
+  memcpy(p->params, params, sizeof params);
+  p->log_scale = log_scale;
+}
+
+/* ---- the loss, per scalar residual ----
+ * ρ(s) of s = r² in units of σ (Huber, Cauchy, or s itself), and ρ'(s).
+ * The solver's model of a residual is the reweighted one, √ρ' r with the
+ * Jacobian √ρ' ∂r (iteratively reweighted least squares: its gradient is
+ * that of ½ ρ, its Gauss-Newton matrix Σ ρ' JᵀJ), while the cost is ½ ρ
+ * itself (lsq.h). Ceres' LossFunction would do the same per residual
+ * block, but a block here holds a thousand observations. */
+static double robust(const fit_problem *p, double s, double *rho1) {
+  double k2 = p->loss_scale * p->loss_scale;
+  switch (p->loss) {
+    case CF_LOSS_HUBER:
+      if (s <= k2) break;
+      *rho1 = p->loss_scale / sqrt(s);
+      return 2.0 * p->loss_scale * sqrt(s) - k2;
+    case CF_LOSS_CAUCHY:
+      *rho1 = 1.0 / (1.0 + s / k2);
+      return k2 * log1p(s / k2);
+    case CF_LOSS_NONE:
+    default:
+      break;
+  }
+  *rho1 = 1.0;
+  return s;
+}
+
+/* ---- residuals ---- */
+
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost,
+                         double *residuals, double *jacobian) {
+  const fit_problem *p = user;
+  size_t begin = block * p->block_size;
+  size_t n = p->count - begin < p->block_size ? p->count - begin : p->block_size;
+  size_t pairs = n * (size_t)p->lights;
+  const int dim = p->dim, unknowns = p->num_unknowns, lights = p->lights;
+  double params[CF_MAX_DIM], log_scale;
+  double *log_e = malloc(p->images * sizeof *log_e);
+  double *f = malloc(3 * pairs * sizeof *f);
+  double *grad = jacobian ? malloc(3 * (size_t)dim * pairs * sizeof *grad) : NULL;
+  int ok = log_e && f && (!jacobian || grad);
+  /* the model unknowns' slots and d param / d x: 1, ρ for log ρ, 1/(2σ)
+   * for σ²; the scale's and the exposures' columns */
+  int model_u[CF_MAX_DIM], model_slot[CF_MAX_DIM], model_count = 0, scale_u = -1, exposures = 0;
+  double model_factor[CF_MAX_DIM];
+  int *exposure_u = p->images > 0 ? malloc(p->images * sizeof *exposure_u) : NULL;
+  ok = ok && exposure_u;
+  if (ok) {
+    values_at(p, x, params, &log_scale, log_e);
+    /* σ² unknowns: evaluate at σ >= 1e-6, so that ∂f/∂σ² = (∂f/∂σ)/(2σ)
+     * has no 0/0 (f depends on σ through σ² only, and differs from its
+     * value at σ = 0 by about 1e-13 relative there) */
+    for (size_t k = 0; k < p->images; ++k) exposure_u[k] = -1;
+    for (int u = 0; u < unknowns; ++u) {
+      const fit_unknown *unk = &p->unknowns[u];
+      if (unk->kind == FIT_SQUARE_SLOT) params[unk->slot] = fmax(params[unk->slot], 1e-6);
+      if (unk->kind == FIT_LOG_SCALE) scale_u = u;
+      else if (unk->kind == FIT_LOG_EXPOSURE) exposure_u[unk->slot] = u, exposures = 1;
+    }
+    for (int u = 0; u < unknowns; ++u) {
+      const fit_unknown *unk = &p->unknowns[u];
+      if (unk->kind != FIT_MODEL_SLOT && unk->kind != FIT_LOG_SLOT && unk->kind != FIT_SQUARE_SLOT)
+        continue;
+      model_u[model_count] = u;
+      model_slot[model_count] = unk->slot;
+      model_factor[model_count++] = unk->kind == FIT_LOG_SLOT      ? params[unk->slot]
+                                    : unk->kind == FIT_SQUARE_SLOT ? 0.5 / params[unk->slot]
+                                                                   : 1.0;
+    }
+    ok = cf_eval_batch(p->model, params, pairs, p->geometry + begin * (size_t)lights, f, grad) ==
+         CF_OK;
+  }
+  double total = 0.0; /* Σ w ρ */
+  for (size_t i = 0; ok && i < n; ++i) {
+    size_t row = begin + i, k = observation(p, row);
+    const double *y = p->obs->rgb + 3 * k;
+    uint32_t image = p->obs->image[k];
+    double gain = exp(log_scale + log_e[image]);
+    const double *w = p->weight + 3 * (row * (size_t)lights);
+    for (int c = 0; c < 3; ++c) {
+      /* the prediction and its gradient in the model's slots: with one
+       * light, the evaluator's gradient scaled (no accumulator to zero: a
+       * zeroed array here cost a fifth of this function in stores) */
+      double model_value = 0.0, sum[CF_MAX_DIM], weight_one = 0.0;
+      const double *dmodel = sum;
+      if (lights == 1) {
+        weight_one = w[c];
+        model_value = weight_one * f[3 * i + (size_t)c];
+        if (grad) dmodel = grad + (3 * i + (size_t)c) * (size_t)dim;
+      } else {
+        weight_one = 1.0;
+        for (int s = 0; s < dim; ++s) sum[s] = 0.0;
+        for (int j = 0; j < lights; ++j) {
+          size_t pair = i * (size_t)lights + (size_t)j;
+          double wj = w[3 * (size_t)j + (size_t)c];
+          if (wj == 0.0) continue;
+          model_value += wj * f[3 * pair + (size_t)c];
+          if (!grad) continue;
+          const double *g = grad + (3 * pair + (size_t)c) * (size_t)dim;
+          for (int s = 0; s < dim; ++s) sum[s] += wj * g[s];
+        }
+      }
+      double prediction = gain * model_value;
+      double inv_sigma = p->inv_sigma[3 * row + (size_t)c];
+      double r = (prediction - y[c]) * inv_sigma;
+      /* a clipped channel only counts while the model predicts less */
+      int censored = (p->obs->flags[k] >> c & 1u) && prediction >= y[c];
+      if (censored) r = 0.0;
+      double rho1, root = p->sample_root ? p->sample_root[row] : 1.0;
+      double rho = robust(p, r * r, &rho1);
+      total += root * root * rho;
+      size_t out = 3 * i + (size_t)c;
+      if (!isfinite(rho)) ok = 0;
+      if (residuals) residuals[out] = root * sqrt(rho1) * r;
+      if (!jacobian) continue;
+      double *row_j = jacobian + out * (size_t)unknowns;
+      /* Ceres checks the arrays for non-finite values: 0, not 0·∞ */
+      double scale = censored ? 0.0 : root * sqrt(rho1) * inv_sigma;
+      if (exposures) memset(row_j, 0, (size_t)unknowns * sizeof *row_j);
+      double model_scale = scale * gain * weight_one;
+      for (int m = 0; m < model_count; ++m)
+        row_j[model_u[m]] = model_scale * dmodel[model_slot[m]] * model_factor[m];
+      if (scale_u >= 0) row_j[scale_u] = scale * prediction;
+      if (!exposures) continue;
+      /* log e_k: this image's, or for the last image −Σ of the others */
+      if (image == p->last_image) {
+        for (size_t e = 0; e + 1 < p->images; ++e)
+          if (exposure_u[e] >= 0) row_j[exposure_u[e]] = -scale * prediction;
+      } else if (exposure_u[image] >= 0) {
+        row_j[exposure_u[image]] = scale * prediction;
+      }
+    }
+  }
+  *cost = 0.5 * total;
+  free(exposure_u);
+  free(log_e);
+  free(f);
+  free(grad);
+  return ok && isfinite(*cost);
+}
+
+int fit_problem_block_columns(void *user, size_t block, int *columns) {
+  const fit_problem *p = user;
+  size_t begin = block * p->block_size;
+  size_t end = p->count - begin < p->block_size ? p->count : begin + p->block_size;
+  int has_last = 0, k = 0;
+  for (size_t i = begin; i < end && !has_last; ++i)
+    has_last = p->obs->image[observation(p, i)] == p->last_image;
+  for (int u = 0; u < p->num_unknowns; ++u) {
+    const fit_unknown *unk = &p->unknowns[u];
+    int used = unk->kind != FIT_LOG_EXPOSURE || has_last;
+    for (size_t i = begin; i < end && !used; ++i)
+      used = p->obs->image[observation(p, i)] == (uint32_t)unk->slot;
+    if (used) columns[k++] = u;
+  }
+  return k;
+}
+
+cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,
+                              cf_error *err) {
+  size_t pairs = p->count * (size_t)p->lights;
+  double *f = malloc(3 * pairs * sizeof *f);
+  if (!f) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_eval_batch(p->model, p->params, pairs, p->geometry, f, NULL);
+  for (size_t i = 0; i < p->count; ++i) {
+    size_t k = observation(p, i);
+    double gain = exp(p->log_scale + p->log_exposures[p->obs->image[k]]);
+    for (int c = 0; c < 3; ++c) {
+      double value = 0.0;
+      for (int j = 0; j < p->lights; ++j) {
+        size_t pair = i * (size_t)p->lights + (size_t)j;
+        value += p->weight[3 * pair + (size_t)c] * f[3 * pair + (size_t)c];
+      }
+      prediction[3 * i + (size_t)c] = gain * value;
+      measured[3 * i + (size_t)c] = p->obs->rgb[3 * k + (size_t)c];
+    }
+  }
+  free(f);
+  return CF_OK;
+}
+
+cf_status fit_problem_init_sample(fit_problem *p, fit_sample *sample, const cf_capture *capture,
+                                  cf_model_id model, const fit_population *population,
+                                  size_t target, cf_error *err) {
+  cf_status s = fit_sample_draw(cf_capture_observations(capture), population, target, sample, err);
+  if (s != CF_OK) return s;
+  s = fit_problem_init(p, capture, model, sample->index, sample->count, err);
+  if (s != CF_OK) {
+    fit_sample_free(sample);
+    return s;
+  }
+  s = fit_problem_set_sample_weights(p, sample->weight, err);
+  if (s != CF_OK) {
+    fit_problem_release(p);
+    fit_sample_free(sample);
+  }
+  return s;
+}

@@ -1,0 +1,163 @@
+/* The fit's least-squares problem (include/clayfit/fit.h) over a capture's
+ * observations: the geometry of every (observation, light) pair computed
+ * once, the map from the solver's vector x to the model's parameters, the
+ * exposures and the scale, and the residuals of a block of observations
+ * with their Jacobian. Private to src/fit. */
+#ifndef CLAYFIT_FIT_PROBLEM_H
+#define CLAYFIT_FIT_PROBLEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "clayfit/capture.h"
+#include "clayfit/fit.h"
+#include "clayfit/model.h"
+
+enum { FIT_MAX_FREE = CF_MAX_DIM + 1 + 1024 }; /* model, scale, exposures */
+
+/* What the solver's entry x[i] is. Model slots are fitted as they are,
+ * but the albedo, fitted as its logarithm (ρ > 0 for any real clay; the
+ * bound ρ <= 1 becomes log ρ <= 0), and σ, fitted as σ² (bounds squared). */
+typedef enum fit_unknown_kind {
+  FIT_MODEL_SLOT, /* params[slot] */
+  FIT_SQUARE_SLOT, /* params[slot]²: the Oren-Nayar σ, whose derivative
+                     vanishes at σ = 0 (MODEL.md: "a fitter may work in
+                     σ²"); f depends on σ only through σ² */
+  FIT_LOG_SLOT,   /* log params[slot]: the albedo. A flash capture sees the
+                     film's diffuse light nearly straight on, so it
+                     determines ρ e^(−τ P) with P hardly varying: a curved
+                     valley in (ρ, τ), straight in (log ρ, τ), where the
+                     solver needs 3 to 5 times fewer iterations. */
+  FIT_LOG_SCALE,  /* log s */
+  FIT_LOG_EXPOSURE /* log e_k of image `slot` (the last image's is minus
+                      the sum of the others: their mean log is 0) */
+} fit_unknown_kind;
+
+typedef struct fit_unknown {
+  fit_unknown_kind kind;
+  int slot;
+} fit_unknown;
+
+typedef struct fit_problem {
+  const cf_observations *obs;
+  cf_model_id model;
+  int dim, lights;
+  size_t count;              /* observations used (all, or a subsample) */
+  const uint32_t *index;     /* the observations used (NULL: all, in order) */
+  cf_geometry *geometry;     /* count × lights */
+  double *weight;            /* count × lights × 3: E_c c_i (0 when unlit) */
+  double *inv_sigma;         /* count × 3; from the noise model, or 1 */
+  double *sample_root;       /* count: √(sample weight), or NULL (all 1) */
+  double sigma;              /* one σ for all (no noise model), else 0 */
+  size_t images;
+  uint32_t last_image;       /* images − 1 */
+
+  /* current values: what the unknowns start from and what the others are
+   * held at */
+  double params[CF_MAX_DIM];
+  double log_scale;
+  double *log_exposures;     /* images */
+  int num_unknowns;
+  fit_unknown unknowns[FIT_MAX_FREE];
+  double lower[FIT_MAX_FREE], upper[FIT_MAX_FREE];
+  int solves, iterations;     /* tallies of fit_solve on this problem */
+  double solver_seconds;
+  int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
+                                 at its lower/upper bound by the data
+                                 (lsq.h), else 0 */
+
+  cf_loss loss;
+  double loss_scale;         /* in σ */
+  size_t block_size;         /* observations per residual block */
+  size_t num_blocks;
+  int *block_residuals;
+} fit_problem;
+
+/* The observations a fit uses: all of the capture's (index NULL; count is
+ * then the capture's) or the `count` listed in index. */
+typedef struct fit_population {
+  const uint32_t *index;
+  size_t count;
+} fit_population;
+
+/* A weighted sample of a population, for the stages that work on a
+ * subsample: about `target` observations in two strata, taken evenly
+ * (every stride-th) from each. The specular stratum is the 1/16 of the
+ * population whose half vector comes nearest the normal (for any light):
+ * it holds the highlights, rare in a photo but what fixes the lobes, and
+ * gets a quarter of the sample. The rest gets the other three quarters.
+ * Each observation's weight is its stratum's size over its sample's, so
+ * that the sample's cost estimates the population's without bias (a
+ * Horvitz-Thompson estimate). A population no larger than the target is
+ * taken whole, with weights 1. */
+typedef struct fit_sample {
+  uint32_t *index;
+  double *weight;
+  size_t count;
+} fit_sample;
+
+cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from, size_t target,
+                          fit_sample *sample, cf_error *err);
+void fit_sample_free(fit_sample *sample);
+
+/* Set up the problem for all observations (index NULL) or the `count`
+ * listed in index; nothing is free yet (fit_problem_free_slot etc.). */
+/* Weigh each used observation's cost by weight[i] (a sample's weights;
+ * copied). Without it every weight is 1. */
+cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, cf_error *err);
+
+cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_id model,
+                           const uint32_t *index, size_t count, cf_error *err);
+
+/* A weighted sample of about `target` observations of the population
+ * (fit_sample_draw) and the problem over it with the sample's weights.
+ * On failure nothing is left to free; else release both. */
+cf_status fit_problem_init_sample(fit_problem *p, fit_sample *sample, const cf_capture *capture,
+                                  cf_model_id model, const fit_population *population,
+                                  size_t target, cf_error *err);
+void fit_problem_release(fit_problem *p);
+
+/* Does the capture give a noise model with some noise (read or shot > 0)? */
+int fit_capture_has_noise(const cf_capture *capture);
+
+/* σ for every residual: the capture's noise model if it has one with some
+ * noise, else one σ (> 0) for all. */
+void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma);
+
+/* Declare the unknowns (in this order: model slots, the scale, the
+ * exposures) and the blocks; call after the last. */
+void fit_problem_clear_unknowns(fit_problem *p);
+void fit_problem_free_slot(fit_problem *p, int slot);
+void fit_problem_free_scale(fit_problem *p);
+void fit_problem_free_exposures(fit_problem *p);
+cf_status fit_problem_finish(fit_problem *p, cf_error *err);
+
+/* σ from the noise model at the current prediction instead of the
+ * measurement (iteratively reweighted least squares): weights computed
+ * from y correlate with y's own noise and bias the fit by about −shot per
+ * pixel, which the ill-conditioned directions (ρ against τ in a flash
+ * capture) amplify; at the fixed point of prediction-based weights the
+ * quasi-score Σ (y − μ)/v(μ) ∂μ is 0, which is unbiased. No-op without a
+ * noise model. */
+cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_error *err);
+
+/* x from the problem's current values, and the current values from x. */
+void fit_problem_get_x(const fit_problem *p, double *x);
+void fit_problem_set_x(fit_problem *p, const double *x);
+
+/* lsq.h's callback: the cost of block `block` at x, and the residuals
+ * and Jacobian of its Gauss-Newton model (reweighted by the loss). */
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost,
+                         double *residuals, double *jacobian);
+
+/* lsq.h's block_columns: the unknowns block `block` depends on (every
+ * model slot and the scale; the exposures of its images, all of them when
+ * it holds the last image, whose log exposure is minus their sum). */
+int fit_problem_block_columns(void *user, size_t block, int *columns);
+
+/* The prediction (with scale and exposures) and the measurement of every
+ * used observation and channel at the current values: 3 × count each. */
+cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,
+                              cf_error *err);
+
+#endif /* CLAYFIT_FIT_PROBLEM_H */

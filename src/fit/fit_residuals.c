@@ -1,0 +1,170 @@
+/* Residual statistics of a fit and σ from its residuals
+ * (fit_residuals.h). */
+#include "fit_residuals.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "order_statistics.h"
+
+/* Per image, the observation with the brightest measurement (−1: none). */
+static cf_status brightest(const fit_problem *p, const double *measured, long **best,
+                           cf_error *err) {
+  double *level = malloc(p->images * sizeof *level);
+  *best = malloc(p->images * sizeof **best);
+  if (!level || !*best) {
+    free(level);
+    return cf_error_set(err, CF_ENOMEM, "out of memory");
+  }
+  for (size_t k = 0; k < p->images; ++k) level[k] = -HUGE_VAL, (*best)[k] = -1;
+  for (size_t i = 0; i < p->count; ++i) {
+    uint32_t image = p->obs->image[p->index ? p->index[i] : i];
+    double y = measured[3 * i] + measured[3 * i + 1] + measured[3 * i + 2];
+    if (y > level[image]) level[image] = y, (*best)[image] = (long)i;
+  }
+  free(level);
+  return CF_OK;
+}
+
+/* Sums of squared residuals and measurements, and their count. */
+typedef struct sums {
+  double e2, y2;
+  size_t n;
+} sums;
+
+static void add(sums *s, double e, double y) {
+  s->e2 += e * e;
+  s->y2 += y * y;
+  ++s->n;
+}
+
+static double rms(const sums *s) { return s->n ? sqrt(s->e2 / (double)s->n) : 0.0; }
+static double relative(const sums *s) { return s->y2 > 0.0 ? sqrt(s->e2 / s->y2) : 0.0; }
+
+cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result *r,
+                         cf_error *err) {
+  size_t n = 3 * p->count;
+  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
+  sums *per_image = calloc(p->images, sizeof *per_image);
+  long *best = NULL;
+  r->image_rmse = calloc(p->images, sizeof *r->image_rmse);
+  r->image_relative_rmse = calloc(p->images, sizeof *r->image_relative_rmse);
+  cf_status s = prediction && measured && per_image && r->image_rmse && r->image_relative_rmse
+                    ? fit_problem_predict(p, prediction, measured, err)
+                    : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) s = brightest(p, measured, &best, err);
+  sums total = {0}, core = {0}, rest = {0};
+  const double radius2 = CF_FIT_CORE_RADIUS_PX * CF_FIT_CORE_RADIUS_PX;
+  for (size_t i = 0; s == CF_OK && i < p->count; ++i) {
+    size_t k = p->index ? p->index[i] : i;
+    uint32_t image = p->obs->image[k];
+    size_t b = (size_t)best[image]; /* the image has an observation: this one */
+    size_t kb = p->index ? p->index[b] : b;
+    double dx = (double)p->obs->pixel[2 * k] - (double)p->obs->pixel[2 * kb];
+    double dy = (double)p->obs->pixel[2 * k + 1] - (double)p->obs->pixel[2 * kb + 1];
+    int in_core = dx * dx + dy * dy <= radius2;
+    for (int c = 0; c < 3; ++c) {
+      size_t at = 3 * i + (size_t)c;
+      double e = prediction[at] - measured[at];
+      if ((p->obs->flags[k] >> c & 1u) && e >= 0.0) {
+        ++r->censored; /* predicted at or above the clip level: no residual */
+        continue;
+      }
+      if (o->loss != CF_LOSS_NONE && fabs(e) * p->inv_sigma[at] > o->loss_scale) ++r->rejected;
+      add(&total, e, measured[at]);
+      add(&per_image[image], e, measured[at]);
+      add(in_core ? &core : &rest, e, measured[at]);
+    }
+  }
+  if (s == CF_OK) {
+    r->residuals = total.n;
+    r->rmse = rms(&total);
+    r->relative_rmse = relative(&total);
+    r->core_residuals = core.n;
+    r->core_rmse = rms(&core);
+    r->core_relative_rmse = relative(&core);
+    r->rest_rmse = rms(&rest);
+    r->rest_relative_rmse = relative(&rest);
+    for (size_t k = 0; k < p->images; ++k) {
+      r->image_rmse[k] = rms(&per_image[k]);
+      r->image_relative_rmse[k] = relative(&per_image[k]);
+    }
+  }
+  free(prediction);
+  free(measured);
+  free(per_image);
+  free(best);
+  return s;
+}
+
+/* σ = 1.4826 × the median absolute residual (a robust estimate), over the
+ * uncensored residuals at the current values; a sample's weights weigh
+ * the median. */
+cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
+  size_t n = 3 * p->count;
+  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
+  cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
+                                       : cf_error_set(err, CF_ENOMEM, "out of memory");
+  size_t m = 0;
+  for (size_t i = 0; s == CF_OK && i < n; ++i) {
+    double e = prediction[i] - measured[i];
+    if ((p->obs->flags[(p->index ? p->index[i / 3] : i / 3)] >> (i % 3) & 1u) && e >= 0.0) continue;
+    double root = p->sample_root ? p->sample_root[i / 3] : 1.0;
+    prediction[m] = fabs(e);
+    measured[m++] = root * root; /* the weight (m <= i: nothing unread is overwritten) */
+  }
+  double median = 0.0;
+  if (s == CF_OK && m > 0) {
+    if (!p->sample_root) median = fit_kth_smallest(prediction, m, m / 2);
+    else if (!fit_weighted_median(prediction, measured, m, &median))
+      s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  }
+  if (s == CF_OK) *sigma = median > 0.0 ? 1.4826 * median : 1e-12;
+  free(prediction);
+  free(measured);
+  return s;
+}
+
+cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
+                       const cf_fit_result *fit, double sigma, cf_loss loss, double loss_scale,
+                       fit_score *score, cf_error *err) {
+  memset(score, 0, sizeof *score);
+  fit_problem p;
+  cf_status s = fit_problem_init(&p, capture, fit->model, population->index, population->count, err);
+  if (s != CF_OK) return s;
+  memcpy(p.params, fit->params, sizeof p.params);
+  p.log_scale = log(fit->scale);
+  for (size_t k = 0; k < p.images && fit->exposures; ++k) p.log_exposures[k] = log(fit->exposures[k]);
+  p.loss = loss;
+  p.loss_scale = loss_scale;
+  fit_problem_clear_unknowns(&p);
+  s = fit_problem_finish(&p, err);
+  if (s == CF_OK && fit_capture_has_noise(capture)) s = fit_problem_reweight(&p, capture, err);
+  else if (s == CF_OK) fit_problem_set_sigma(&p, capture, sigma);
+  for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b) {
+    double cost;
+    if (!fit_problem_evaluate(&p, p.params, b, &cost, NULL, NULL))
+      s = cf_error_set(err, CF_ENUMERIC, "the %s fit cannot be evaluated on these observations",
+                       cf_model_info_get(fit->model)->code);
+    score->cost += cost;
+  }
+  size_t n = 3 * p.count;
+  double *prediction = s == CF_OK ? malloc(n * sizeof *prediction) : NULL;
+  double *measured = s == CF_OK ? malloc(n * sizeof *measured) : NULL;
+  if (s == CF_OK && (!prediction || !measured)) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) s = fit_problem_predict(&p, prediction, measured, err);
+  for (size_t i = 0; s == CF_OK && i < n; ++i) {
+    double e = prediction[i] - measured[i];
+    size_t k = p.index ? p.index[i / 3] : i / 3;
+    if ((p.obs->flags[k] >> (i % 3) & 1u) && e >= 0.0) continue; /* censored */
+    score->e2 += e * e;
+    score->y2 += measured[i] * measured[i];
+    ++score->used;
+  }
+  score->residuals = n;
+  free(prediction);
+  free(measured);
+  fit_problem_release(&p);
+  return s;
+}

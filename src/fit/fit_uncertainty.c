@@ -1,0 +1,142 @@
+/* The uncertainty of a fit (fit_uncertainty.h). */
+#include "fit_uncertainty.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fit_plan.h"
+#include "lsq.h"
+#include "symmetric_eigen.h"
+
+/* A model slot's standard deviation from its unknown's variance:
+ * dρ = ρ d log ρ; dσ = dσ² / (2σ), and at σ = 0, where σ = √σ² is not
+ * differentiable, the half-width √sd(σ²) (σ² <= sd(σ²) within one sd). */
+double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance) {
+  double sd = sqrt(fmax(0.0, variance)), x = p->params[unk->slot];
+  if (unk->kind == FIT_LOG_SLOT) return x * sd;
+  if (unk->kind == FIT_SQUARE_SLOT) return x > 0.5 * sqrt(sd) ? sd / (2.0 * x) : sqrt(sd);
+  return sd;
+}
+
+/* JᵀJ over every unknown (n², row-major) at the current values: the
+ * covariance's and the rank analysis's one pass over the observations. */
+cf_status fit_normal_matrix(fit_problem *p, double *jtj, cf_error *err) {
+  int n = p->num_unknowns;
+  memset(jtj, 0, (size_t)n * (size_t)n * sizeof *jtj);
+  double x[FIT_MAX_FREE];
+  fit_problem_get_x(p, x);
+  for (size_t b = 0; b < p->num_blocks; ++b) {
+    int rows = p->block_residuals[b];
+    double *r = malloc((size_t)rows * sizeof *r), *j = malloc((size_t)rows * (size_t)n * sizeof *j);
+    double cost;
+    if (!r || !j || !fit_problem_evaluate(p, x, b, &cost, r, j)) {
+      free(r);
+      free(j);
+      return cf_error_set(err, CF_ENUMERIC, "the Jacobian could not be evaluated at the solution");
+    }
+    for (int row = 0; row < rows; ++row) {
+      const double *jr = j + (size_t)row * (size_t)n;
+      for (int a = 0; a < n; ++a) {
+        if (jr[a] == 0.0) continue;
+        for (int c = a; c < n; ++c) jtj[a * n + c] += jr[a] * jr[c];
+      }
+    }
+    free(r);
+    free(j);
+  }
+  for (int a = 0; a < n; ++a)
+    for (int c = 0; c < a; ++c) jtj[a * n + c] = jtj[c * n + a];
+  return CF_OK;
+}
+
+/* The model slots' block of JᵀJ, each column scaled to its range's width
+ * (∂/∂ρ = ∂/∂log ρ / ρ). */
+static int scaled_model_block(const fit_problem *p, const double *jtj, int *slots, double *h) {
+  int n = p->num_unknowns, m = 0;
+  int map[CF_MAX_DIM];
+  double width[CF_MAX_DIM];
+  for (int u = 0; u < n && m < CF_MAX_DIM; ++u) {
+    const fit_unknown *unk = &p->unknowns[u];
+    if (unk->kind == FIT_LOG_SCALE || unk->kind == FIT_LOG_EXPOSURE || p->at_bound[u]) continue;
+    map[m] = u;
+    slots[m] = unk->slot;
+    width[m] = unk->kind == FIT_LOG_SLOT ? fit_slot_width(p, unk->slot) / p->params[unk->slot]
+                                         : p->upper[u] - p->lower[u];
+    ++m;
+  }
+  for (int a = 0; a < m; ++a)
+    for (int c = 0; c < m; ++c) h[a * m + c] = jtj[map[a] * n + map[c]] * width[a] * width[c];
+  return m;
+}
+
+/* The covariance of the unknowns not at a bound (those at one are held
+ * there: their rows and columns are 0). */
+cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
+                                 int *rank_deficient, cf_error *err) {
+  int n = p->num_unknowns, m = 0;
+  int *map = malloc((size_t)n * sizeof *map);
+  double *sub = malloc((size_t)n * (size_t)n * sizeof *sub);
+  double *sub_covariance = malloc((size_t)n * (size_t)n * sizeof *sub_covariance);
+  cf_status s = map && sub && sub_covariance ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (int u = 0; s == CF_OK && u < n; ++u)
+    if (!p->at_bound[u]) map[m++] = u;
+  for (int a = 0; s == CF_OK && a < m; ++a)
+    for (int b = 0; b < m; ++b) sub[a * m + b] = jtj[map[a] * n + map[b]];
+  *rank_deficient = 0;
+  if (s == CF_OK && m > 0) s = cf_lsq_covariance(m, sub, sub_covariance, rank_deficient, err);
+  if (s == CF_OK) {
+    memset(covariance, 0, (size_t)n * (size_t)n * sizeof *covariance);
+    for (int a = 0; !*rank_deficient && a < m; ++a)
+      for (int b = 0; b < m; ++b) covariance[map[a] * n + map[b]] = sub_covariance[a * m + b];
+  }
+  free(map);
+  free(sub);
+  free(sub_covariance);
+  return s;
+}
+
+/* Mark the model slots the capture does not constrain: those that carry
+ * the eigenvectors of the (width-scaled) normal matrix whose eigenvalues
+ * are negligible, or whose standard deviation exceeds half their range. */
+cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
+                                    int rank_deficient, fit_plan *plan, int *found) {
+  *found = 0;
+  if (covariance && !rank_deficient) {
+    for (int u = 0; u < p->num_unknowns; ++u) {
+      const fit_unknown *unk = &p->unknowns[u];
+      if (unk->kind == FIT_LOG_SCALE || unk->kind == FIT_LOG_EXPOSURE || p->at_bound[u]) continue;
+      double sd = fit_slot_sd(p, unk, covariance[u * p->num_unknowns + u]);
+      if (sd > 0.5 * fit_slot_width(p, unk->slot)) {
+        plan->status[p->unknowns[u].slot] = CF_PARAM_UNCONSTRAINED;
+        *found = 1;
+      }
+    }
+    return CF_OK;
+  }
+  int slots[CF_MAX_DIM];
+  double h[CF_MAX_DIM * CF_MAX_DIM], values[CF_MAX_DIM], vectors[CF_MAX_DIM * CF_MAX_DIM];
+  int m = scaled_model_block(p, jtj, slots, h);
+  if (m == 0) return CF_OK;
+  symmetric_eigen(h, m, values, vectors);
+  double largest = 0.0;
+  for (int i = 0; i < m; ++i) largest = fmax(largest, values[i]);
+  int weakest = 0;
+  for (int i = 0; i < m; ++i) {
+    if (values[i] < values[weakest]) weakest = i;
+    if (values[i] > 1e-10 * largest) continue;
+    for (int k = 0; k < m; ++k)
+      if (fabs(vectors[k * m + i]) > 0.3) {
+        plan->status[slots[k]] = CF_PARAM_UNCONSTRAINED;
+        *found = 1;
+      }
+  }
+  if (!*found) { /* the solver saw a deficiency: name the weakest direction's largest part */
+    int best = 0;
+    for (int k = 1; k < m; ++k)
+      if (fabs(vectors[k * m + weakest]) > fabs(vectors[best * m + weakest])) best = k;
+    plan->status[slots[best]] = CF_PARAM_UNCONSTRAINED;
+    *found = 1;
+  }
+  return CF_OK;
+}

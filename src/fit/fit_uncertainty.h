@@ -1,0 +1,31 @@
+/* The uncertainty of a fit: the normal matrix JᵀJ at the solution, the
+ * covariance of the unknowns not at a bound (ceres::Covariance, lsq.h),
+ * and the model slots the capture does not constrain. Private to
+ * src/fit. */
+#ifndef CLAYFIT_FIT_UNCERTAINTY_H
+#define CLAYFIT_FIT_UNCERTAINTY_H
+
+#include "fit_plan.h"
+#include "fit_problem.h"
+
+/* A model slot's standard deviation from its unknown's variance:
+ * dρ = ρ d log ρ; dσ = dσ² / (2σ), and near σ = 0, where σ = √σ² is not
+ * differentiable, the half-width √sd(σ²). */
+double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance);
+
+/* JᵀJ over every unknown (n², row-major) at the current values. */
+cf_status fit_normal_matrix(fit_problem *p, double *jtj, cf_error *err);
+
+/* The covariance of the unknowns not at a bound (those at one: rows and
+ * columns 0); *rank_deficient when JᵀJ is singular there. */
+cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
+                              int *rank_deficient, cf_error *err);
+
+/* Mark in the plan the model slots the capture does not constrain: those
+ * carrying the eigenvectors of the range-scaled normal matrix with
+ * negligible eigenvalues, or whose standard deviation exceeds half their
+ * range. *found says whether there were any. */
+cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
+                                 int rank_deficient, fit_plan *plan, int *found);
+
+#endif /* CLAYFIT_FIT_UNCERTAINTY_H */

@@ -1,0 +1,113 @@
+/* Bounded non-linear least squares through Ceres (lsq_ceres.cpp), behind a
+ * C interface: the fit layer describes a problem of one parameter vector
+ * and many residual blocks, each evaluated by a C callback, and gets back
+ * the minimiser, Ceres' summary and, on request, the covariance
+ * (ceres::Covariance). This is the only place that includes Ceres. Private
+ * to src/fit. */
+#ifndef CLAYFIT_FIT_LSQ_H
+#define CLAYFIT_FIT_LSQ_H
+
+#include <stddef.h>
+
+#include "clayfit/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Residual block `block` at parameters x: its cost (always), and, when
+ * jacobian is not NULL, the residuals u and the row-major Jacobian J
+ * (residual_count × num_params) of its Gauss-Newton model: Jᵀu is the
+ * cost's gradient and JᵀJ its Gauss-Newton matrix. Without a robust loss
+ * u is the residual vector and cost = ½|u|²; with one, u = √ρ' r and
+ * cost = ½ Σ ρ(r²) (the reweighted model, whose curvature is right in the
+ * loss's tails, where √ρ-transformed residuals would halve it). residuals
+ * may be NULL when jacobian is. Returns 0 when the block cannot be
+ * computed there (not finite): the solver then rejects the step. Called
+ * from several threads at once. */
+typedef int (*cf_lsq_evaluate)(void *user, const double *x, size_t block, double *cost,
+                               double *residuals, double *jacobian);
+
+typedef struct cf_lsq_problem {
+  int num_params;
+  double *x;                 /* in: the start; out: the solution */
+  const double *lower, *upper; /* per parameter; ±HUGE_VAL for none */
+  size_t num_blocks;
+  const int *block_residuals;  /* residuals in each block */
+  cf_lsq_evaluate evaluate;
+  /* optional: the columns of block `block`'s Jacobian that can be nonzero
+   * (structurally, at any x), written to columns; returns their number.
+   * NULL: all of them. */
+  int (*block_columns)(void *user, size_t block, int *columns);
+  void *user;
+  /* out (num_params, optional): −1 or +1 for a parameter that ends at its
+   * lower or upper bound with the cost's gradient pointing out of the box
+   * (a constrained minimum: the data prefer a value at or beyond it), 0
+   * otherwise */
+  int *at_bound;
+} cf_lsq_problem;
+
+typedef struct cf_lsq_options {
+  int max_iterations;
+  int threads;
+  double function_tolerance, gradient_tolerance, parameter_tolerance;
+  /* a line search that lowers the cost by less than this is not worth
+   * another solve (the fit's costs are in units of σ²: 1e-3 is a change
+   * of χ² by 0.002) */
+  double line_search_tolerance;
+} cf_lsq_options;
+
+void cf_lsq_default_options(cf_lsq_options *options);
+
+typedef struct cf_lsq_summary {
+  double initial_cost, final_cost; /* ½ Σ r² */
+  int iterations;
+  int converged;                   /* Ceres' CONVERGENCE */
+  char termination[64];
+  double seconds;
+} cf_lsq_summary;
+
+/* Solve (Levenberg-Marquardt, dense normal equations) with an active set
+ * for the bounds.
+ *
+ * Block compression. A block whose model has m residuals u with Jacobian
+ * J (m × k in its k nonzero columns) and cost C is handed to Ceres as
+ * k + 1 residuals
+ *   ρ = (c, d),  c = Λ^(−1/2) Vᵀ Jᵀu,  d = sqrt(2C − |c|²),
+ * with the Jacobian (R; 0), R = Λ^(1/2) Vᵀ, where JᵀJ = V Λ Vᵀ. Then
+ * ½|ρ|² = C, RᵀR = JᵀJ and Rᵀc = Jᵀu (c is u projected on the range of
+ * J, so |c|² <= |u|² <= 2C for Huber and Cauchy): the cost, the gradient
+ * and the Gauss-Newton matrix are exactly the block's, so Levenberg-
+ * Marquardt takes the same steps, while Ceres holds (k + 1) × n numbers
+ * per block instead of m × n (for a million observations, 14 thousand
+ * rows instead of 3.6 million). Eigenvalues below 1e-14 of the largest
+ * are dropped (a block that does not see a parameter). Evaluations of the
+ * cost alone return (0, …, 0, √(2C)).
+ *
+ * The active set. Ceres clips a step at the box, but its model of the
+ * cost change does not see the clipping: once a parameter sits at a bound
+ * its gradient pushes against, every step's ratio of actual to predicted
+ * decrease is small, the trust region shrinks, and the solver crawls (100
+ * iterations that move nothing, measured on an Oren-Nayar σ at 0). So a
+ * parameter that starts at a bound, or stays at one for two iterations, is
+ * pinned there (held through a ceres::SubsetManifold) and the rest solved
+ * again; at the end a pinned parameter whose gradient points back into the
+ * box is released and the solve repeated (at most a few rounds). */
+cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options *options,
+                       cf_lsq_summary *summary, cf_error *err);
+
+/* The covariance (JᵀJ)⁻¹ (n², row-major) of a least-squares solution from
+ * its normal matrix jtj = JᵀJ (n², row-major), by ceres::Covariance
+ * (DENSE_SVD) on the n × n factor R = Λ^(1/2) Vᵀ of jtj = V Λ Vᵀ: the
+ * covariance depends on J only through JᵀJ, and a solution with millions
+ * of residuals then costs an n × n decomposition instead of an SVD of J.
+ * *rank_deficient is set (covariance untouched) when JᵀJ is singular to
+ * within a reciprocal condition number of 1e-12. */
+cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance, int *rank_deficient,
+                            cf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CLAYFIT_FIT_LSQ_H */

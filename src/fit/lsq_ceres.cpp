@@ -1,0 +1,442 @@
+// The Ceres adapter behind lsq.h: one ceres::CostFunction per residual
+// block, each a thin shell over the C callback, Levenberg-Marquardt with
+// dense normal equations (few parameters, many residuals), bounds as Ceres
+// bounds, ceres::Covariance for the uncertainty. No exception crosses the
+// C boundary.
+#include <ceres/ceres.h>
+#include <glog/logging.h>
+
+#include <algorithm>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <thread>
+#include <vector>
+
+#include "lsq.h"
+
+namespace {
+
+// One residual block of the C problem, compressed (lsq.h): k + 1
+// residuals (c, d) with the Jacobian (R; 0) in the block's k columns.
+class BlockCost final : public ceres::CostFunction {
+ public:
+  BlockCost(const cf_lsq_problem* problem, size_t block) : problem_(problem), block_(block) {
+    const int n = problem->num_params;
+    rows_ = problem->block_residuals[block];
+    columns_.resize(n);
+    int k = n;
+    if (problem->block_columns != nullptr) k = problem->block_columns(problem->user, block, columns_.data());
+    else
+      for (int i = 0; i < n; ++i) columns_[i] = i;
+    columns_.resize(k);
+    set_num_residuals(k + 1);
+    mutable_parameter_block_sizes()->push_back(n);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    double* jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
+    const int n = problem_->num_params, k = static_cast<int>(columns_.size());
+    double cost = 0.0;
+    if (jacobian == nullptr) {  // the cost alone: (0, …, 0, √(2C))
+      if (!problem_->evaluate(problem_->user, parameters[0], block_, &cost, nullptr, nullptr))
+        return false;
+      std::fill(residuals, residuals + k, 0.0);
+      residuals[k] = std::sqrt(2.0 * cost);
+      return true;
+    }
+    thread_local std::vector<double> u, j;
+    u.resize(rows_);
+    j.resize(static_cast<size_t>(rows_) * n);
+    if (!problem_->evaluate(problem_->user, parameters[0], block_, &cost, u.data(), j.data()))
+      return false;
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    Eigen::Map<const RowMajor> full(j.data(), rows_, n);
+    Eigen::Map<const Eigen::VectorXd> uv(u.data(), rows_);
+    Eigen::MatrixXd jk(rows_, k);  // the k columns that can be nonzero
+    for (int c = 0; c < k; ++c) jk.col(c) = full.col(columns_[c]);
+    Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(k, k);
+    jtj.selfadjointView<Eigen::Lower>().rankUpdate(jk.transpose());
+    jtj = jtj.selfadjointView<Eigen::Lower>();
+    const Eigen::VectorXd jtu = jk.transpose() * uv;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(jtj);
+    if (eigen.info() != Eigen::Success) return false;
+    const double largest = std::max(0.0, eigen.eigenvalues().maxCoeff());
+    double projected = 0.0;
+    std::fill(jacobian, jacobian + static_cast<size_t>(k + 1) * n, 0.0);
+    for (int i = 0; i < k; ++i) {
+      const double lambda = eigen.eigenvalues()(i);
+      residuals[i] = 0.0;
+      if (!(lambda > 1e-14 * largest)) continue;  // a direction the block does not see
+      const double root = std::sqrt(lambda);
+      residuals[i] = eigen.eigenvectors().col(i).dot(jtu) / root;
+      projected += residuals[i] * residuals[i];
+      for (int c = 0; c < k; ++c)
+        jacobian[static_cast<size_t>(i) * n + columns_[c]] = root * eigen.eigenvectors()(c, i);
+    }
+    residuals[k] = std::sqrt(std::max(0.0, 2.0 * cost - projected));
+    return true;
+  }
+
+ private:
+  const cf_lsq_problem* problem_;
+  size_t block_;
+  int rows_ = 0;
+  std::vector<int> columns_;
+};
+
+// r = R (x − x0): a residual block whose Jacobian is the factor R.
+class FactorCost final : public ceres::CostFunction {
+ public:
+  FactorCost(int n, const double* r, const double* x0) : n_(n), r_(r), x0_(x0) {
+    set_num_residuals(n);
+    mutable_parameter_block_sizes()->push_back(n);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    for (int i = 0; i < n_; ++i) {
+      residuals[i] = 0.0;
+      for (int j = 0; j < n_; ++j) residuals[i] += r_[i * n_ + j] * (parameters[0][j] - x0_[j]);
+    }
+    if (jacobians != nullptr && jacobians[0] != nullptr)
+      std::memcpy(jacobians[0], r_, sizeof(double) * static_cast<size_t>(n_) * n_);
+    return true;
+  }
+
+ private:
+  int n_;
+  const double* r_;
+  const double* x0_;
+};
+
+void quiet_glog() {
+  // Ceres reports through glog; the fit reports rank deficiency itself
+  static bool done = false;
+  if (!done) {
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    done = true;
+  }
+}
+
+void copy_termination(const ceres::Solver::Summary& s, cf_lsq_summary* out) {
+  std::snprintf(out->termination, sizeof out->termination, "%s",
+                ceres::TerminationTypeToString(s.termination_type));
+}
+
+}  // namespace
+
+extern "C" cf_status cf_lsq_covariance(int n, const double* jtj, double* covariance,
+                                       int* rank_deficient, cf_error* err) {
+  try {
+    quiet_glog();
+    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> a(
+        jtj, n, n);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+    if (eigen.info() != Eigen::Success)
+      return cf_error_set(err, CF_ENUMERIC, "the normal matrix could not be decomposed");
+    // R = Λ^(1/2) Vᵀ, row-major
+    std::vector<double> r(static_cast<size_t>(n) * n), x(n, 0.0), x0(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      double root = std::sqrt(std::max(0.0, eigen.eigenvalues()(i)));
+      for (int j = 0; j < n; ++j) r[static_cast<size_t>(i) * n + j] = root * eigen.eigenvectors()(j, i);
+    }
+    ceres::Problem problem;
+    problem.AddResidualBlock(new FactorCost(n, r.data(), x0.data()), nullptr, x.data());
+    ceres::Covariance::Options options;
+    options.algorithm_type = ceres::DENSE_SVD;
+    options.min_reciprocal_condition_number = 1e-12;
+    ceres::Covariance covariance_problem(options);
+    std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
+    if (!covariance_problem.Compute(blocks, &problem)) {
+      if (rank_deficient) *rank_deficient = 1;
+      return CF_OK;
+    }
+    if (rank_deficient) *rank_deficient = 0;
+    covariance_problem.GetCovarianceBlock(x.data(), x.data(), covariance);
+    return CF_OK;
+  } catch (const std::bad_alloc&) {
+    return cf_error_set(err, CF_ENOMEM, "out of memory for the covariance");
+  } catch (const std::exception& e) {
+    return cf_error_set(err, CF_ENUMERIC, "the covariance failed: %s", e.what());
+  } catch (...) {
+    return cf_error_set(err, CF_ENUMERIC, "the covariance failed");
+  }
+}
+
+extern "C" void cf_lsq_default_options(cf_lsq_options* options) {
+  options->max_iterations = 100;
+  options->threads = 2;
+  options->function_tolerance = 1e-10;
+  options->gradient_tolerance = 1e-12;
+  options->parameter_tolerance = 1e-10;
+  options->line_search_tolerance = 1e-3;
+}
+
+namespace {
+
+// Stops the solve when a free parameter has sat at a bound for two
+// iterations in a row (Ceres clips steps at the box, so "at" is exact).
+class BoundWatcher final : public ceres::IterationCallback {
+ public:
+  BoundWatcher(const cf_lsq_problem* problem, const std::vector<int>& active)
+      : problem_(problem), active_(active), streak_(active.size(), 0), hit_(active.size(), 0) {}
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+    if (it.step_is_successful || it.iteration == 0) {
+      previous_ = current_;
+      current_.assign(problem_->x, problem_->x + problem_->num_params);
+    }
+    bool stop = false;
+    for (size_t i = 0; i < active_.size(); ++i) {
+      if (active_[i] != 0) continue;
+      int side = side_of(i);
+      streak_[i] = side != 0 ? streak_[i] + 1 : 0;
+      if (streak_[i] >= 2) hit_[i] = side, stop = true;
+    }
+    return stop ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+  int side_of(size_t i) const {
+    double x = problem_->x[i];
+    if (x <= problem_->lower[i]) return -1;
+    if (x >= problem_->upper[i]) return 1;
+    return 0;
+  }
+  const std::vector<int>& hit() const { return hit_; }
+  // x before the last successful step (empty when there was none)
+  const std::vector<double>& previous() const { return previous_; }
+  bool any_hit() const {
+    return std::any_of(hit_.begin(), hit_.end(), [](int h) { return h != 0; });
+  }
+
+ private:
+  const cf_lsq_problem* problem_;
+  const std::vector<int>& active_;
+  std::vector<int> streak_, hit_;
+  std::vector<double> previous_, current_;
+};
+
+// The cost's gradient Jᵀu at problem->x, from the callback.
+bool gradient_at(const cf_lsq_problem* problem, std::vector<double>* gradient) {
+  const int n = problem->num_params;
+  gradient->assign(n, 0.0);
+  std::vector<double> r, j;
+  for (size_t b = 0; b < problem->num_blocks; ++b) {
+    const size_t rows = static_cast<size_t>(problem->block_residuals[b]);
+    r.resize(rows);
+    j.resize(rows * n);
+    double cost;
+    if (!problem->evaluate(problem->user, problem->x, b, &cost, r.data(), j.data())) return false;
+    for (size_t row = 0; row < rows; ++row)
+      for (int c = 0; c < n; ++c) (*gradient)[c] += j[row * n + c] * r[row];
+  }
+  return true;
+}
+
+// The total cost at x (NaN when a block cannot be evaluated there), the
+// blocks shared among `threads` threads.
+double cost_at(const cf_lsq_problem* problem, const double* x, int threads) {
+  const size_t count = static_cast<size_t>(std::max(1, threads));
+  std::vector<double> partial(count, 0.0);
+  auto work = [&](size_t t) {
+    for (size_t b = t; b < problem->num_blocks; b += count) {
+      double cost;
+      if (!problem->evaluate(problem->user, x, b, &cost, nullptr, nullptr)) cost = NAN;
+      partial[t] += cost;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < count; ++t) pool.emplace_back(work, t);
+  work(0);
+  for (auto& thread : pool) thread.join();
+  double total = 0.0;
+  for (double p : partial) total += p;
+  return total;
+}
+
+// Did the chunk's successful steps decrease the cost by more than their
+// model predicted (mean ratio above 1.25)? Gauss-Newton then takes steps
+// too short along a direction where the residuals' own curvature cancels
+// part of JᵀJ (a fit with large systematic residuals), and converges
+// linearly, slowly.
+bool under_stepping(const ceres::Solver::Summary& summary) {
+  double sum = 0.0;
+  int count = 0;
+  for (const auto& it : summary.iterations)
+    if (it.iteration > 0 && it.step_is_successful) sum += it.relative_decrease, ++count;
+  return count >= 3 && sum / count > 1.25;
+}
+
+// A line search along the last Gauss-Newton step d = x − x0: the costs at
+// x0 + t d for t = 2, 4, 8, … (clipped into the box) while they decrease,
+// then the vertex of the parabola through the best and its neighbours.
+// Returns whether x moved (to a lower cost).
+bool extrapolate(cf_lsq_problem* problem, const std::vector<double>& x0, double cost, int threads,
+                 double tolerance) {
+  const int n = problem->num_params;
+  const bool trace = std::getenv("CLAYFIT_LSQ_TRACE") != nullptr;
+  std::vector<double> trial(n), best(problem->x, problem->x + n);
+  auto point = [&](double t) {
+    for (int i = 0; i < n; ++i)
+      trial[i] = std::min(problem->upper[i],
+                          std::max(problem->lower[i], x0[i] + t * (best[i] - x0[i])));
+  };
+  const std::vector<double> x1(best);
+  double t_prev = 1.0, c_prev = cost, t_best = 1.0, c_best = cost, t_next = 0.0, c_next = NAN;
+  for (double t = 2.0; t <= 64.0; t *= 2.0) {
+    point(t);
+    double c = cost_at(problem, trial.data(), threads);
+    if (trace) std::printf("line search t = %g: cost %.9e (from %.9e)\n", t, c, cost);
+    if (!(c < c_best)) {
+      t_next = t, c_next = c;
+      break;
+    }
+    t_prev = t_best, c_prev = c_best, t_best = t, c_best = c;
+  }
+  best = x1;  // point() steps from x0 along x1 − x0
+  if (t_best == 1.0 || !(c_best < cost - tolerance)) return false;
+  std::vector<double> at_best(n);
+  point(t_best);
+  at_best = trial;
+  if (std::isfinite(c_next)) {  // the parabola through (t_prev, t_best, t_next)
+    double a = t_prev, b = t_best, c = t_next, fa = c_prev, fb = c_best, fc = c_next;
+    double num = (b - a) * (b - a) * (fb - fc) - (b - c) * (b - c) * (fb - fa);
+    double den = (b - a) * (fb - fc) - (b - c) * (fb - fa);
+    if (den != 0.0) {
+      double t = b - 0.5 * num / den;
+      if (t > a && t < c) {
+        point(t);
+        double ct = cost_at(problem, trial.data(), threads);
+        if (trace) std::printf("line search t = %g (parabola): cost %.9e\n", t, ct);
+        if (ct < c_best) c_best = ct, at_best = trial;
+      }
+    }
+  }
+  std::copy(at_best.begin(), at_best.end(), problem->x);
+  return true;
+}
+
+// One Ceres solve with the parameters flagged in `active` held.
+void solve_once(cf_lsq_problem* problem, const cf_lsq_options* options,
+                const std::vector<int>& active, int max_iterations, BoundWatcher* watcher,
+                ceres::Solver::Summary* summary) {
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem ceres_problem(problem_options);
+  ceres_problem.AddParameterBlock(problem->x, problem->num_params);
+  for (size_t b = 0; b < problem->num_blocks; ++b)
+    ceres_problem.AddResidualBlock(new BlockCost(problem, b), nullptr, problem->x);
+  for (int i = 0; i < problem->num_params; ++i) {
+    if (std::isfinite(problem->lower[i]))
+      ceres_problem.SetParameterLowerBound(problem->x, i, problem->lower[i]);
+    if (std::isfinite(problem->upper[i]))
+      ceres_problem.SetParameterUpperBound(problem->x, i, problem->upper[i]);
+  }
+  std::vector<int> held;
+  for (int i = 0; i < problem->num_params; ++i)
+    if (active[i] != 0) held.push_back(i);
+  if (static_cast<int>(held.size()) == problem->num_params)
+    ceres_problem.SetParameterBlockConstant(problem->x);
+  else if (!held.empty())
+    ceres_problem.SetManifold(problem->x, new ceres::SubsetManifold(problem->num_params, held));
+  ceres::Solver::Options solver_options;
+  solver_options.minimizer_type = ceres::TRUST_REGION;
+  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = max_iterations;
+  solver_options.num_threads = options->threads;
+  solver_options.function_tolerance = options->function_tolerance;
+  solver_options.gradient_tolerance = options->gradient_tolerance;
+  solver_options.parameter_tolerance = options->parameter_tolerance;
+  solver_options.update_state_every_iteration = true;  // the watcher reads x
+  solver_options.callbacks.push_back(watcher);
+  // CLAYFIT_LSQ_TRACE=1: Ceres' per-iteration lines on stdout, to study
+  // convergence
+  const bool trace = std::getenv("CLAYFIT_LSQ_TRACE") != nullptr;
+  solver_options.logging_type = trace ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = trace;
+  ceres::Solve(solver_options, &ceres_problem, summary);
+}
+
+}  // namespace
+
+extern "C" cf_status cf_lsq_solve(cf_lsq_problem* problem, const cf_lsq_options* options,
+                                  cf_lsq_summary* summary, cf_error* err) {
+  constexpr int MAX_ROUNDS = 8, CHUNK = 8, MAX_EXTRAPOLATIONS = 50;
+  try {
+    quiet_glog();
+    const int n = problem->num_params;
+    std::vector<int> active(n, 0);
+    for (int i = 0; i < n; ++i)  // a start at a bound starts pinned there
+      active[i] = problem->x[i] <= problem->lower[i] ? -1 : problem->x[i] >= problem->upper[i] ? 1 : 0;
+    std::vector<double> gradient;
+    ceres::Solver::Summary ceres_summary;
+    int iterations = 0;
+    double seconds = 0.0, initial_cost = 0.0;
+    std::vector<double> x0(n);
+    int extrapolations = 0;
+    for (int round = 0; round < MAX_ROUNDS;) {
+      BoundWatcher watcher(problem, active);
+      int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
+      std::copy(problem->x, problem->x + n, x0.begin());
+      solve_once(problem, options, active, budget, &watcher, &ceres_summary);
+      if (round == 0 && extrapolations == 0 && iterations == 0)
+        initial_cost = ceres_summary.initial_cost;
+      iterations += std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
+      seconds += ceres_summary.total_time_in_seconds;
+      if (ceres_summary.termination_type == ceres::FAILURE) break;
+      // a chunk ended, or the solve converged: with steps too short, a line
+      // search along the last one, and on
+      const bool chunk_ended = ceres_summary.termination_type == ceres::NO_CONVERGENCE;
+      if (!watcher.any_hit() && iterations < options->max_iterations &&
+          (chunk_ended || ceres_summary.termination_type == ceres::CONVERGENCE)) {
+        bool moved = under_stepping(ceres_summary) && !watcher.previous().empty() &&
+                     extrapolate(problem, watcher.previous(), ceres_summary.final_cost,
+                                 options->threads, options->line_search_tolerance);
+        extrapolations += moved;
+        if (chunk_ended || (moved && extrapolations < MAX_EXTRAPOLATIONS)) continue;
+      }
+      ++round;
+      if (watcher.any_hit()) {  // pin and solve the rest
+        for (int i = 0; i < n; ++i)
+          if (watcher.hit()[i] != 0) active[i] = watcher.hit()[i];
+        if (iterations < options->max_iterations) continue;
+      }
+      // the end of a solve: parameters at a bound join the active set when
+      // the gradient pushes them out, and leave it when it pulls them in
+      if (!gradient_at(problem, &gradient)) break;
+      bool released = false;
+      for (int i = 0; i < n; ++i) {
+        int side = watcher.side_of(static_cast<size_t>(i));
+        bool outward = side != 0 && side * -gradient[i] > 0.0;  // descent is −g
+        if (active[i] != 0 && !outward) active[i] = 0, released = true;
+        else if (active[i] == 0 && outward) active[i] = side;
+      }
+      if (!released || iterations >= options->max_iterations) break;
+    }
+    if (problem->at_bound != nullptr) std::copy(active.begin(), active.end(), problem->at_bound);
+    summary->initial_cost = initial_cost;
+    summary->final_cost = ceres_summary.final_cost;
+    summary->iterations = iterations;
+    summary->converged = ceres_summary.termination_type == ceres::CONVERGENCE;
+    summary->seconds = seconds;
+    copy_termination(ceres_summary, summary);
+    if (ceres_summary.termination_type == ceres::FAILURE)
+      return cf_error_set(err, CF_ENUMERIC, "the solver failed: %s",
+                          ceres_summary.message.c_str());
+    return CF_OK;
+  } catch (const std::bad_alloc&) {
+    return cf_error_set(err, CF_ENOMEM, "out of memory in the solver");
+  } catch (const std::exception& e) {
+    return cf_error_set(err, CF_ENUMERIC, "the solver failed: %s", e.what());
+  } catch (...) {
+    return cf_error_set(err, CF_ENUMERIC, "the solver failed");
+  }
+}

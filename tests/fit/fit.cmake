@@ -1,0 +1,58 @@
+# Tests of the fit.
+add_library(clayfit_fit_test_support STATIC fit/fit_support.c)
+target_link_libraries(clayfit_fit_test_support PUBLIC clayfit_fit clayfit_capture clayfit_test_support
+                      PRIVATE clayfit_warnings m)
+clayfit_c_test(test_fit_recovery SOURCES fit/test_fit_recovery.c LIBS clayfit_fit_test_support LABELS fit)
+clayfit_c_test(test_fit_choice SOURCES fit/test_fit_choice.c LIBS clayfit_fit_test_support LABELS fit)
+
+# clayfit fit on a small noise-free EXR capture of M2: fit.json valid
+# against its schema, the truth recovered, the model choice recorded.
+set(FIT_SMALL ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_small)
+add_test(NAME cli_fit_synth COMMAND ${CLAYFIT} --quiet synth -o ${FIT_SMALL} --model M2
+         --images 8 --size 200x150 --format exr --no-noise --supersample 1
+         --param albedo=0.6,0.4,0.3 --param roughness=0.3 --param f0=0.05
+         --param diffuse_roughness=0.3)
+set_tests_properties(cli_fit_synth PROPERTIES LABELS "cli;fit" FIXTURES_SETUP fit_small)
+function(clayfit_fit_cli_test name)
+  clayfit_cli_test(${name} ${ARGN})
+  set_tests_properties(cli_${name} PROPERTIES LABELS "cli;fit" FIXTURES_REQUIRED fit_small)
+endfunction()
+clayfit_fit_cli_test(fit_auto --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/auto/fit.json
+  --expect "doc['model']['code'] == 'M2' and doc['choice']['mode'] == 'auto'"
+  --expect "[c['model'] for c in doc['choice']['candidates']] == ['M0', 'M1', 'M2', 'M3', 'M4']"
+  --expect "sum(c['chosen'] for c in doc['choice']['candidates']) == 1"
+  --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
+  --expect "abs(doc['params']['f0']['value'] - 0.05) < 1e-4"
+  --expect "doc['residuals']['relative_rmse'] < 1e-4"
+  --expect "len(doc['residuals']['per_image']) == 8"
+  --expect "doc['timing']['choice_s'] > 0"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/auto)
+clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/hold/fit.json
+  --expect "doc['model']['code'] == 'M2' and doc['choice'] == {'mode': 'forced', 'chosen': 'M2', 'candidates': []}"
+  --expect "doc['params']['f0']['value'] == 0.05 and doc['params']['f0']['status'] == 'held'"
+  --expect "doc['held'] == [{'name': 'f0', 'value': 0.05, 'why': 'held'}]"
+  --expect "doc['params']['f0']['sd'] == 0"
+  --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/hold --model dielectric
+     --hold f0=0.05 --loss none)
+# errors: exit 2 with the reason on stderr, no fit.json
+clayfit_fit_cli_test(error_fit_hold_out_of_range --exit 2 --stderr "--hold f0=0.5 is outside its range \\[0, 0.25\\]"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M2 --hold f0=0.5)
+clayfit_fit_cli_test(error_fit_hold_unknown --exit 2 --stderr "--hold shininess: no model of the ladder has a parameter"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --hold shininess=3)
+clayfit_fit_cli_test(error_fit_hold_not_in_model --exit 2 --stderr "model M2 \\(dielectric\\) has no parameter 'film_f0'"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M2 --hold film_f0=0.02)
+clayfit_fit_cli_test(error_fit_free_unknown --exit 2 --stderr "--free gloss: no model of the ladder"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --free gloss)
+clayfit_fit_cli_test(error_fit_bad_loss --exit 2 --stderr "--loss: 'l1' is not huber, cauchy or none"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --loss l1)
+clayfit_fit_cli_test(error_fit_bad_model --exit 2 --stderr "M9"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M9)
+clayfit_fit_cli_test(error_fit_hold_nan --exit 2 --stderr "--hold roughness"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --hold roughness=nan)
+clayfit_cli_test(error_fit_no_capture --exit 2 --stderr "no-such-capture.json"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/no-such-capture.json -o ${FIT_SMALL}/never)
+clayfit_c_test(test_fit_calibration SOURCES fit/test_fit_calibration.c LIBS clayfit_fit_test_support
+               LABELS fit)

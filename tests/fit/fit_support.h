@@ -1,0 +1,27 @@
+/* What the fit's tests share: small synthetic captures written to a
+ * temporary folder and loaded, and the error of a fitted value. */
+#ifndef CLAYFIT_TEST_FIT_SUPPORT_H
+#define CLAYFIT_TEST_FIT_SUPPORT_H
+
+#include "clayfit/capture.h"
+#include "clayfit/fit.h"
+#include "clayfit/synth.h"
+
+/* A small capture of `model` at `params`: 8 images of 240 × 180 (focal
+ * 290 px: the sphere about 120 px across), float EXR, one sample per pixel
+ * (the fit's own footprint), the default noise, seed 1. */
+void fit_test_synth_options(cf_synth_options *o, cf_model_id model, const double *params);
+
+/* A fresh temporary folder (the path is written into dir, at least 64
+ * bytes), and its removal. */
+int fit_test_make_dir(char *dir, size_t size);
+void fit_test_remove_dir(const char *dir);
+
+/* Render `o` into dir/name and load it; NULL (and a failed CHECK) on an
+ * error. */
+cf_capture *fit_test_capture(const char *dir, const char *name, const cf_synth_options *o);
+
+/* |fitted − truth| over max(|truth|, the range's width) of slot k. */
+double fit_test_error(cf_model_id model, int k, double fitted, double truth);
+
+#endif /* CLAYFIT_TEST_FIT_SUPPORT_H */

@@ -1,0 +1,83 @@
+/* The model choice (cf_fit_auto): captures synthesised from M0, M2 and M4
+ * are each assigned their own model; an M4 capture whose film effects are
+ * below the capture's noise (a thin, nearly clear film over a clay whose
+ * own lobe is faint) is assigned a simpler model, and the same capture
+ * with ten times less noise (σ/10: read noise /10, shot-noise variance
+ * /100) is assigned M4. */
+#include <stdio.h>
+#include <string.h>
+
+#include "fit_support.h"
+#include "support/check.h"
+
+CHECK_MAIN_STATE;
+
+typedef struct choice_case {
+  const char *name;
+  cf_model_id truth;
+  double params[CF_MAX_DIM];
+  double noise_factor;  /* σ relative to the default noise */
+  int expect;           /* the model to be chosen; −1: any simpler than truth */
+} choice_case;
+
+/* the thin film: τ = 0.02, base_f0 = 0.002 */
+#define WEAK_FILM {0.7, 0.45, 0.3, 0.3, 0.3, 0.03, 0.02, 0.02, 0.02, 0.6, 0.002}
+
+static const choice_case cases[] = {
+    {"M0", CF_MODEL_LAMBERT, {0.7, 0.45, 0.3}, 1.0, CF_MODEL_LAMBERT},
+    {"M2", CF_MODEL_DIELECTRIC, {0.6, 0.4, 0.3, 0.3, 0.3, 0.05}, 1.0, CF_MODEL_DIELECTRIC},
+    {"M4", CF_MODEL_CLAY, {0.7, 0.45, 0.3, 0.3, 0.2, 0.03, 0.1, 0.3, 0.6, 0.6, 0.01}, 1.0,
+     CF_MODEL_CLAY},
+    {"M4-thin-film", CF_MODEL_CLAY, WEAK_FILM, 1.0, -1},
+    {"M4-thin-film-low-noise", CF_MODEL_CLAY, WEAK_FILM, 0.1, CF_MODEL_CLAY},
+};
+
+static void print_table(const cf_fit_choice *choice) {
+  for (int m = 0; m < choice->count; ++m) {
+    const cf_fit_candidate *c = &choice->candidate[m];
+    printf("    %s  k %2d  BIC %12.6g  held-out %.5f sigma, %.4f %% %s\n    %s\n",
+           cf_model_info_get(c->model)->code, c->parameters, c->bic, c->heldout_score,
+           100.0 * c->heldout_relative_rmse, c->chosen ? "<- chosen" : "", c->note);
+  }
+}
+
+static void choose(const char *dir, const choice_case *c) {
+  cf_synth_options so;
+  fit_test_synth_options(&so, c->truth, c->params);
+  so.read_noise *= c->noise_factor;
+  so.shot_noise *= c->noise_factor * c->noise_factor;
+  cf_capture *capture = fit_test_capture(dir, c->name, &so);
+  if (!capture) return;
+  cf_fit_options options[CF_MODEL_COUNT];
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) cf_fit_default_options(&options[m], (cf_model_id)m);
+  cf_fit_choice choice;
+  cf_fit_result result;
+  cf_error err = {0};
+  cf_status s = cf_fit_auto(capture, options, &choice, &result, &err);
+  CHECK(s == CF_OK, "%s: %s", c->name, err.message);
+  if (s == CF_OK) {
+    const char *chosen = cf_model_info_get(choice.chosen)->code;
+    printf("%s (read noise %g, shot %g): chose %s in %.2f s\n", c->name, so.read_noise,
+           so.shot_noise, chosen, choice.seconds);
+    print_table(&choice);
+    if (c->expect >= 0)
+      CHECK(choice.chosen == (cf_model_id)c->expect, "%s: chose %s, expected %s", c->name, chosen,
+            cf_model_info_get((cf_model_id)c->expect)->code);
+    else
+      CHECK(choice.chosen < c->truth, "%s: chose %s, expected a model simpler than %s", c->name,
+            chosen, cf_model_info_get(c->truth)->code);
+    CHECK(result.model == choice.chosen && choice.candidate[choice.chosen].chosen,
+          "%s: the result is not the chosen model's", c->name);
+  }
+  cf_fit_choice_free(&choice);
+  cf_fit_result_free(&result);
+  cf_capture_free(capture);
+}
+
+int main(void) {
+  char dir[64];
+  if (!fit_test_make_dir(dir, sizeof dir)) return 1;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) choose(dir, &cases[i]);
+  fit_test_remove_dir(dir);
+  return check_finish("test_fit_choice");
+}
