@@ -2,10 +2,11 @@
 # The main job on a fresh Debian 12 machine: installs what is missing,
 # builds in Release, and runs clayfit on its built-in default capture.
 #
-# Today (issues 2 and 3): render the default synthetic capture (16 photos of
+# Today (issues 2 to 4): render the default synthetic capture (16 photos of
 # wet clay, model M4, with their COLMAP model), load it and draw the pixels
-# it uses, then the evaluator's benchmark and one evaluation with gradient.
-# The fit, the presets and the report join as they land.
+# it uses, fit it (the model chosen from the ladder, then its parameters with
+# uncertainties: out/demo/fit/fit.json), then the evaluator's benchmark and
+# one evaluation with gradient. The presets and the report join as they land.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,6 +26,10 @@ echo "== clayfit inspect: the capture as observations =="
 "$clayfit" inspect "$out/capture/capture.json" -o "$out/inspect" | tee "$out/inspect.txt"
 
 echo
+echo "== clayfit fit: the model chosen from the ladder, its parameters (truth: capture/truth.json) =="
+"$clayfit" fit "$out/capture/capture.json" -o "$out/fit" | tee "$out/fit.txt"
+
+echo
 echo "== clayfit bench eval (evaluator speed, one thread) =="
 "$clayfit" bench eval --min-time 0.5 | tee "$out/bench-eval.txt"
 
@@ -35,4 +40,4 @@ echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the o
 head -c 600 "$out/eval-clay.json"
 echo "..."
 echo
-echo "demo: outputs in $out/ (capture/, inspect/ overlays, bench-eval.txt, eval-clay.json)"
+echo "demo: outputs in $out/ (capture/, inspect/ overlays, fit/fit.json, bench-eval.txt, eval-clay.json)"

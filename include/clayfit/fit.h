@@ -61,6 +61,9 @@ typedef struct cf_fit_options {
   double start_scale;
   int max_iterations;     /* per start; default 100 */
   int threads;            /* Ceres' threads; default 2 */
+  const unsigned char *use_image; /* NULL: every image; else fit only the
+                             observations of images k with use_image[k]
+                             (for example to predict held-out lights) */
   double density;         /* the film's known thickness for the report of
                              density and absorption; NaN: the convention
                              (mean absorption 0.8) */
@@ -203,6 +206,15 @@ void cf_fit_choice_free(cf_fit_choice *choice);
 cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *options,
                      cf_fit_result *result, cf_error *err);
 void cf_fit_result_free(cf_fit_result *result);
+
+/* A fit's residual statistics (at its parameters, scale and exposures)
+ * on the observations of the images with use_image[k] (NULL: all): the
+ * residual counts, RMSE and relative RMSE, the highlight cores and the rest,
+ * per image (0 for an image not used), into *stats, whose other fields are
+ * copied from fit (cf_fit_result_free). */
+cf_status cf_fit_evaluate(const cf_capture *capture, const cf_fit_result *fit,
+                          const unsigned char *use_image, const cf_fit_options *options,
+                          cf_fit_result *stats, cf_error *err);
 
 const char *cf_param_status_name(cf_param_status status);
 

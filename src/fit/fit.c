@@ -333,6 +333,11 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
 
 cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_result *r,
                      cf_error *err) {
-  fit_population all = {NULL, cf_capture_observations(capture)->count};
-  return fit_run_population(capture, &all, o, r, err);
+  memset(r, 0, sizeof *r);
+  fit_population population;
+  uint32_t *index;
+  cf_status s = fit_population_of_images(capture, o->use_image, &population, &index, err);
+  if (s == CF_OK) s = fit_run_population(capture, &population, o, r, err);
+  free(index);
+  return s;
 }

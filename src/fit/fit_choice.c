@@ -30,8 +30,9 @@ typedef struct choice_split {
   size_t train_count, test_count;
 } choice_split;
 
-static cf_status split_sample(const cf_capture *capture, int exposures_fitted, choice_split *split,
-                              char *heldout, size_t heldout_size, cf_error *err) {
+static cf_status split_sample(const cf_capture *capture, const unsigned char *use_image,
+                              int exposures_fitted, choice_split *split, char *heldout,
+                              size_t heldout_size, cf_error *err) {
   const cf_observations *obs = cf_capture_observations(capture);
   size_t images = cf_capture_image_count(capture);
   size_t stride = (obs->count + CF_FIT_CHOICE_SAMPLE - 1) / CF_FIT_CHOICE_SAMPLE;
@@ -54,6 +55,7 @@ static cf_status split_sample(const cf_capture *capture, int exposures_fitted, c
              exposures_fitted ? " (the exposures are fitted, so no image is held out)" : "");
   for (size_t j = 0, i = 0; i < obs->count; i += stride, ++j) {
     size_t k = obs->image[i];
+    if (use_image && !use_image[k]) continue;
     int test = !by_image ? j % 4 == 3 : images >= 4 ? k % 4 == 3 : k == images - 1;
     if (test) split->test[split->test_count++] = (uint32_t)i;
     else split->train[split->train_count++] = (uint32_t)i;
@@ -179,7 +181,8 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   int exposures = 0;
   for (int m = 0; m < CF_MODEL_COUNT; ++m) exposures |= options[m].fit_exposures;
   choice_split split;
-  cf_status s = split_sample(capture, exposures, &split, choice->heldout, sizeof choice->heldout, err);
+  cf_status s = split_sample(capture, options[0].use_image, exposures, &split, choice->heldout,
+                             sizeof choice->heldout, err);
   fit_population train = {split.train, split.train_count}, test = {split.test, split.test_count};
   choice->train_observations = split.train_count;
   choice->heldout_observations = split.test_count;

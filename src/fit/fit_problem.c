@@ -219,7 +219,7 @@ void fit_problem_free_slot(fit_problem *p, int slot) {
     if (slot >= m->offsets[j]) {
       const cf_param_info *info = cf_param_info_get(m->params[j]);
       if (info->id == CF_PARAM_ALBEDO) {
-        add_unknown(p, FIT_LOG_SLOT, slot, -HUGE_VAL, log(info->upper));
+        add_unknown(p, FIT_LOG_SLOT, slot, log(fmax(info->lower, FIT_ALBEDO_FLOOR)), log(info->upper));
         return;
       }
       if (info->id == CF_PARAM_DIFFUSE_ROUGHNESS) {
@@ -486,4 +486,22 @@ cf_status fit_problem_init_sample(fit_problem *p, fit_sample *sample, const cf_c
     fit_sample_free(sample);
   }
   return s;
+}
+
+cf_status fit_population_of_images(const cf_capture *capture, const unsigned char *use_image,
+                                   fit_population *population, uint32_t **index, cf_error *err) {
+  const cf_observations *obs = cf_capture_observations(capture);
+  *index = NULL;
+  population->index = NULL;
+  population->count = obs->count;
+  if (!use_image) return CF_OK;
+  *index = malloc((obs->count ? obs->count : 1) * sizeof **index);
+  if (!*index) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  size_t n = 0;
+  for (size_t i = 0; i < obs->count; ++i)
+    if (use_image[obs->image[i]]) (*index)[n++] = (uint32_t)i;
+  population->index = *index;
+  population->count = n;
+  if (n == 0) return cf_error_set(err, CF_EINVAL, "the images chosen have no observations");
+  return CF_OK;
 }

@@ -17,7 +17,10 @@ enum { FIT_MAX_FREE = CF_MAX_DIM + 1 + 1024 }; /* model, scale, exposures */
 
 /* What the solver's entry x[i] is. Model slots are fitted as they are,
  * but the albedo, fitted as its logarithm (ρ > 0 for any real clay; the
- * bound ρ <= 1 becomes log ρ <= 0), and σ, fitted as σ² (bounds squared). */
+ * bound ρ <= 1 becomes log ρ <= 0, and ρ >= 0 becomes ρ >= FIT_ALBEDO_FLOOR:
+ * no capture tells an albedo of 1e-6 from 0, and a hidden base must not
+ * drive log ρ to −∞), and σ, fitted as σ² (bounds squared). */
+#define FIT_ALBEDO_FLOOR 1e-6
 typedef enum fit_unknown_kind {
   FIT_MODEL_SLOT, /* params[slot] */
   FIT_SQUARE_SLOT, /* params[slot]²: the Oren-Nayar σ, whose derivative
@@ -95,6 +98,11 @@ typedef struct fit_sample {
   double *weight;
   size_t count;
 } fit_sample;
+
+/* The observations of the images with use_image[k] (NULL: all, index
+ * NULL); *index is owned (free). */
+cf_status fit_population_of_images(const cf_capture *capture, const unsigned char *use_image,
+                                   fit_population *population, uint32_t **index, cf_error *err);
 
 cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from, size_t target,
                           fit_sample *sample, cf_error *err);

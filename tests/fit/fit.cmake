@@ -3,7 +3,8 @@ add_library(clayfit_fit_test_support STATIC fit/fit_support.c)
 target_link_libraries(clayfit_fit_test_support PUBLIC clayfit_fit clayfit_capture clayfit_test_support
                       PRIVATE clayfit_warnings m)
 clayfit_c_test(test_fit_recovery SOURCES fit/test_fit_recovery.c LIBS clayfit_fit_test_support LABELS fit)
-clayfit_c_test(test_fit_choice SOURCES fit/test_fit_choice.c LIBS clayfit_fit_test_support LABELS fit)
+clayfit_c_test(test_fit_choice SOURCES fit/test_fit_choice.c LIBS clayfit_fit_test_support
+               LABELS "fit;slow")
 
 # clayfit fit on a small noise-free EXR capture of M2: fit.json valid
 # against its schema, the truth recovered, the model choice recorded.
@@ -54,5 +55,12 @@ clayfit_fit_cli_test(error_fit_hold_nan --exit 2 --stderr "--hold roughness"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --hold roughness=nan)
 clayfit_cli_test(error_fit_no_capture --exit 2 --stderr "no-such-capture.json"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/no-such-capture.json -o ${FIT_SMALL}/never)
+# statistics over many fits: slow under the sanitizers, which the recovery
+# and hard-case tests already take through the same code
 clayfit_c_test(test_fit_calibration SOURCES fit/test_fit_calibration.c LIBS clayfit_fit_test_support
+               LABELS "fit;slow")
+clayfit_c_test(test_fit_hard_cases SOURCES fit/test_fit_hard_cases.c LIBS clayfit_fit_test_support
                LABELS fit)
+# The real DiLiGenT ball (skipped without ../shared/data): about a minute.
+clayfit_c_test(test_fit_diligent SOURCES fit/test_fit_diligent.c LIBS clayfit_fit clayfit_core
+               LABELS "fit;slow" ARGS ${CMAKE_CURRENT_SOURCE_DIR} ${CLAYFIT_SHARED_DATA})
