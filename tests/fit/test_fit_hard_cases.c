@@ -68,14 +68,23 @@ static int fit(const char *name, cf_capture *capture, cf_model_id model, cf_fit_
 static const double m2_truth[CF_MAX_DIM] = {0.6, 0.4, 0.3, 0.3, 0.3, 0.05};
 static const double m4_truth[CF_MAX_DIM] = {0.7, 0.45, 0.3, 0.3, 0.2, 0.03, 0.1, 0.3, 0.6, 0.6, 0.01};
 
+/* The truth `base` with one slot changed, rendered (default noise) and
+ * fitted with its own model; 0 on an error (CHECKed). */
+static int fit_variant(const char *name, cf_model_id model, const double *base, int slot,
+                       double value, double *truth, cf_fit_result *r) {
+  memcpy(truth, base, CF_MAX_DIM * sizeof *truth);
+  truth[slot] = value;
+  cf_synth_options so;
+  fit_test_synth_options(&so, model, truth);
+  return fit(name, fit_test_capture(root, name, &so), model, r);
+}
+
 static void floor_roughness(void) {
   double truth[CF_MAX_DIM];
-  memcpy(truth, m2_truth, sizeof truth);
-  truth[CF_DIELECTRIC_ROUGHNESS] = 0.03;
-  cf_synth_options so;
-  fit_test_synth_options(&so, CF_MODEL_DIELECTRIC, truth);
   cf_fit_result r;
-  if (!fit("floor_roughness", fit_test_capture(root, "floor", &so), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit_variant("floor_roughness", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_ROUGHNESS, 0.03,
+                   truth, &r))
+    return;
   CHECK(r.params[CF_DIELECTRIC_ROUGHNESS] < 0.06, "floor_roughness: roughness %g",
         r.params[CF_DIELECTRIC_ROUGHNESS]);
   for (int c = 0; c < 3; ++c) /* F0, seen in a few pixels, and ρ are correlated through (1 − F)² */
@@ -124,12 +133,9 @@ static void half_clipped(void) {
 
 static void f0_zero(void) {
   double truth[CF_MAX_DIM];
-  memcpy(truth, m2_truth, sizeof truth);
-  truth[CF_DIELECTRIC_F0] = 0.0;
-  cf_synth_options so;
-  fit_test_synth_options(&so, CF_MODEL_DIELECTRIC, truth);
   cf_fit_result r;
-  if (!fit("f0_zero", fit_test_capture(root, "f0_zero", &so), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit_variant("f0_zero", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_F0, 0.0, truth, &r))
+    return;
   double f0 = r.params[CF_DIELECTRIC_F0], sd = r.sd[CF_DIELECTRIC_F0];
   CHECK(r.status[CF_DIELECTRIC_F0] == CF_PARAM_AT_BOUND || f0 < 3.0 * sd,
         "f0_zero: f0 %g ± %g (%s)", f0, sd, cf_param_status_name(r.status[CF_DIELECTRIC_F0]));
@@ -140,12 +146,9 @@ static void f0_zero(void) {
 
 static void film_f0_floor(void) {
   double truth[CF_MAX_DIM];
-  memcpy(truth, m4_truth, sizeof truth);
-  truth[CF_CLAY_FILM_F0] = 0.01;
-  cf_synth_options so;
-  fit_test_synth_options(&so, CF_MODEL_CLAY, truth);
   cf_fit_result r;
-  if (!fit("film_f0_floor", fit_test_capture(root, "film_f0", &so), CF_MODEL_CLAY, &r)) return;
+  if (!fit_variant("film_f0_floor", CF_MODEL_CLAY, m4_truth, CF_CLAY_FILM_F0, 0.01, truth, &r))
+    return;
   double f0 = r.params[CF_CLAY_FILM_F0], sd = r.sd[CF_CLAY_FILM_F0];
   CHECK(r.status[CF_CLAY_FILM_F0] == CF_PARAM_AT_BOUND || fabs(f0 - 0.01) < fmax(3.0 * sd, 1e-3),
         "film_f0_floor: film_f0 %g ± %g", f0, sd);
@@ -261,12 +264,10 @@ static void outliers(void) {
 
 static void sigma_zero(void) {
   double truth[CF_MAX_DIM];
-  memcpy(truth, m2_truth, sizeof truth);
-  truth[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] = 0.0;
-  cf_synth_options so;
-  fit_test_synth_options(&so, CF_MODEL_DIELECTRIC, truth);
   cf_fit_result r;
-  if (!fit("sigma_zero", fit_test_capture(root, "sigma_zero", &so), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit_variant("sigma_zero", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_DIFFUSE_ROUGHNESS, 0.0,
+                   truth, &r))
+    return;
   double sigma = r.params[CF_DIELECTRIC_DIFFUSE_ROUGHNESS];
   CHECK(r.status[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] == CF_PARAM_AT_BOUND || sigma < 0.05,
         "sigma_zero: sigma %g (%s)", sigma, cf_param_status_name(r.status[CF_DIELECTRIC_DIFFUSE_ROUGHNESS]));
