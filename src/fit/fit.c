@@ -311,8 +311,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     r->solve_seconds = p.solver_seconds;
     r->ambiguous = fit_ambiguous(r, o->model, has_noise ? 1.0 : sigma * sigma);
     if (r->ambiguous)
-      fit_add_warning(r, "two starts far apart ended within the noise of each other: the "
-                         "capture does not tell them apart (see starts)");
+      fit_add_warning(r, "on the multi-start's subsample two starts far apart ended within "
+                         "the noise of each other (see starts); the fit on all observations "
+                         "went on from the best: see its sd and correlations");
     cf_capture_summary summary_of_capture;
     cf_capture_summarize(capture, &summary_of_capture);
     if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
