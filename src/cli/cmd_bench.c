@@ -4,11 +4,11 @@
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "args.h"
 #include "clayfit/model.h"
 #include "cli.h"
+#include "core/clock.h"
 #include "core/rng.h"
 #include "json_out.h"
 
@@ -22,12 +22,6 @@ typedef enum bench_mode {
 } bench_mode;
 static const char *const mode_names[MODE_COUNT] = {"value", "value+grad",
                                                    "value+grad from directions"};
-
-static double now_seconds(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 typedef struct bench_data {
   size_t count;
@@ -94,11 +88,11 @@ static timing time_mode(const bench_data *d, cf_model_id model, const double *pa
   double per_eval[MAX_PASSES];
   run_pass(d, model, params, mode); /* warm-up */
   int passes = 0;
-  double start = now_seconds();
-  while (passes < MAX_PASSES && (passes < 5 || now_seconds() - start < min_time)) {
-    double t0 = now_seconds();
+  double start = cf_now_seconds();
+  while (passes < MAX_PASSES && (passes < 5 || cf_now_seconds() - start < min_time)) {
+    double t0 = cf_now_seconds();
     run_pass(d, model, params, mode);
-    per_eval[passes++] = (now_seconds() - t0) * 1e9 / (double)d->count;
+    per_eval[passes++] = (cf_now_seconds() - t0) * 1e9 / (double)d->count;
   }
   qsort(per_eval, (size_t)passes, sizeof per_eval[0], compare_doubles);
   return (timing){per_eval[passes / 2], per_eval[0], passes};

@@ -4,12 +4,12 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <time.h>
 
 #include "args.h"
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "cli.h"
+#include "core/clock.h"
 #include "core/file.h"
 #include "fit/fit_json.h"
 
@@ -41,12 +41,6 @@ static void fit_usage(FILE *out) {
           "                      (default: MODEL.md's convention, mean absorption 0.8)\n"
           "  --max-iterations N  per solve (default 100)\n"
           "  --threads N         solver threads (default 2)\n");
-}
-
-static double seconds_since(const struct timespec *start) {
-  struct timespec now;
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return (double)(now.tv_sec - start->tv_sec) + 1e-9 * (double)(now.tv_nsec - start->tv_nsec);
 }
 
 /* --hold and --free into one model's options. With known (the model
@@ -241,8 +235,7 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
     return CLI_EXIT_USAGE;
   }
 
-  struct timespec start;
-  clock_gettime(CLOCK_MONOTONIC, &start);
+  double start = cf_now_seconds();
   cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "fit"};
   cf_capture *capture = NULL;
   s = cf_capture_load(argv[optind], &load_options, &capture, &err);
@@ -250,7 +243,7 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
     cli_report("fit", err.message);
     return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
-  double load_seconds = seconds_since(&start);
+  double load_seconds = cf_now_seconds() - start;
   cf_capture_summary summary;
   cf_capture_summarize(capture, &summary);
   for (size_t i = 0; i < summary.warnings && !ctx->quiet; ++i)
@@ -267,7 +260,7 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
     s = cf_fit_run(capture, &ladder[model], &result, &err);
   }
   const cf_fit_options *o = &ladder[automatic && s == CF_OK ? choice.chosen : model];
-  double fit_seconds = seconds_since(&start) - load_seconds;
+  double fit_seconds = cf_now_seconds() - start - load_seconds;
   char path[4096];
   if (s == CF_OK) s = cf_make_dirs(out_dir, &err);
   if (s == CF_OK) s = cf_path_join(out_dir, "fit.json", path, sizeof path, &err);

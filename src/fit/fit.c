@@ -18,8 +18,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "core/clock.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
@@ -52,12 +52,6 @@ const char *cf_fit_stage_name(cf_fit_stage stage) {
     case CF_FIT_STAGE_COUNT: break;
   }
   return "unknown";
-}
-
-static double now_seconds(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 const char *cf_param_status_name(cf_param_status status) {
@@ -227,7 +221,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
 
   /* 2. the start: the multi-start, or the one given */
-  double params[CF_MAX_DIM], log_scale = 0.0, sigma = 1.0, clock = now_seconds(), then;
+  double params[CF_MAX_DIM], log_scale = 0.0, sigma = 1.0, clock = cf_now_seconds(), then;
   if (o->use_start) {
     memcpy(params, o->start, sizeof params);
     for (int k = 0; k < m->dim; ++k)
@@ -241,7 +235,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     s = fit_multistart(capture, population, o, &plan, r, params, &log_scale, &sigma, err);
   }
   if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_START] = (then = now_seconds()) - clock;
+  r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
   clock = then;
 
   /* 3. a larger subsample, then the whole population, with σ and the
@@ -250,7 +244,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   s = refine_on_subsample(capture, population, o, &plan, REFINE_TARGET, sigma, params, &log_scale,
                           r, &switched, err);
   if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = now_seconds()) - clock;
+  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
   clock = then;
   fit_problem p;
   s = fit_problem_init(&p, capture, o->model, population->index, population->count, err);
@@ -321,10 +315,10 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
                          "fix the scale: its albedo is in the lights' relative units",
                       m->code);
   }
-  r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = now_seconds()) - clock;
+  r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = cf_now_seconds()) - clock;
   clock = then;
   if (s == CF_OK) s = fit_statistics(&p, o, r, err);
-  r->stage_seconds[CF_FIT_STAGE_STATISTICS] = now_seconds() - clock;
+  r->stage_seconds[CF_FIT_STAGE_STATISTICS] = cf_now_seconds() - clock;
   free(jtj);
   free(covariance);
   fit_problem_release(&p);

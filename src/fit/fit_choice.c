@@ -10,18 +10,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "core/clock.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
 #include "fit_run.h"
-
-static double now_seconds(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 /* The sample (every stride-th observation, at most CF_FIT_CHOICE_SAMPLE)
  * split into a training and a held-out part; `heldout` says how. */
@@ -86,9 +80,9 @@ static void fit_candidates(const cf_capture *capture, const cf_fit_options optio
     o.model = (cf_model_id)m;
     o.progress = NULL;
     cf_error err = {0};
-    double clock = now_seconds();
+    double clock = cf_now_seconds();
     cf_status s = fit_run_population(capture, train, &o, &c->fit, &err);
-    c->seconds = now_seconds() - clock;
+    c->seconds = cf_now_seconds() - clock;
     c->ok = s == CF_OK;
     if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
   }
@@ -177,7 +171,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   choice->loss_scale = options[0].loss_scale;
   if (cf_capture_observations(capture)->count == 0)
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
-  double clock = now_seconds();
+  double clock = cf_now_seconds();
   int exposures = 0;
   for (int m = 0; m < CF_MODEL_COUNT; ++m) exposures |= options[m].fit_exposures;
   choice_split split;
@@ -192,7 +186,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   }
   if (s == CF_OK) walk_ladder(choice);
   split_free(&split);
-  choice->seconds = now_seconds() - clock;
+  choice->seconds = cf_now_seconds() - clock;
   if (s != CF_OK) return s;
 
   /* the chosen model on every observation, from its candidate fit */
