@@ -160,25 +160,29 @@ int fit_capture_has_noise(const cf_capture *capture) {
   return capture_noise(capture, &read, &shot);
 }
 
+/* 1/σ of the noise model at the values mu (3 per observation used: the
+ * measurements or the predictions): the variance read² + shot · max(μ, 0),
+ * floored at its smallest positive value over them (a dark pixel with no
+ * read noise would otherwise weigh infinitely). */
+static void noise_inv_sigma(fit_problem *p, double read, double shot, const double *mu) {
+  size_t n = 3 * p->count;
+  double floor = read > 0.0 ? read * read : HUGE_VAL;
+  for (size_t i = 0; read == 0.0 && i < n; ++i)
+    if (shot * mu[i] > 0.0) floor = fmin(floor, shot * mu[i]);
+  for (size_t i = 0; i < n; ++i)
+    p->inv_sigma[i] = 1.0 / sqrt(fmax(read * read + shot * fmax(mu[i], 0.0), floor));
+}
+
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma) {
   double read, shot;
   int noise = capture_noise(capture, &read, &shot);
   p->sigma = noise ? 0.0 : sigma;
-  /* the noise model's variance, floored at its smallest positive value (a
-   * dark pixel with no read noise would otherwise weigh infinitely) */
-  double floor = noise && read > 0.0 ? read * read : HUGE_VAL;
-  for (size_t i = 0; noise && read == 0.0 && i < p->count; ++i)
-    for (int c = 0; c < 3; ++c) {
-      double y = p->obs->rgb[3 * observation(p, i) + (size_t)c];
-      if (shot * y > 0.0) floor = fmin(floor, shot * y);
-    }
-  for (size_t i = 0; i < p->count; ++i) {
-    const double *y = p->obs->rgb + 3 * observation(p, i);
-    for (int c = 0; c < 3; ++c) {
-      double variance = noise ? fmax(read * read + shot * fmax(y[c], 0.0), floor) : sigma * sigma;
-      p->inv_sigma[3 * i + (size_t)c] = 1.0 / sqrt(variance);
-    }
-  }
+  /* one σ for all, or the measurements, turned in place into the noise
+   * model's 1/σ */
+  for (size_t i = 0; i < 3 * p->count; ++i)
+    p->inv_sigma[i] =
+        noise ? p->obs->rgb[3 * observation(p, i / 3) + i % 3] : 1.0 / sqrt(sigma * sigma);
+  if (noise) noise_inv_sigma(p, read, shot, p->inv_sigma);
 }
 
 cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_error *err) {
@@ -188,12 +192,7 @@ cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_err
   double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
   cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
                                        : cf_error_set(err, CF_ENOMEM, "out of memory");
-  /* floored like fit_problem_set_sigma: the smallest positive variance */
-  double floor = read > 0.0 ? read * read : HUGE_VAL;
-  for (size_t i = 0; s == CF_OK && read == 0.0 && i < n; ++i)
-    if (shot * prediction[i] > 0.0) floor = fmin(floor, shot * prediction[i]);
-  for (size_t i = 0; s == CF_OK && i < n; ++i)
-    p->inv_sigma[i] = 1.0 / sqrt(fmax(read * read + shot * fmax(prediction[i], 0.0), floor));
+  if (s == CF_OK) noise_inv_sigma(p, read, shot, prediction);
   free(prediction);
   free(measured);
   return s;
@@ -395,7 +394,7 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       double inv_sigma = p->inv_sigma[3 * row + (size_t)c];
       double r = (prediction - y[c]) * inv_sigma;
       /* a clipped channel only counts while the model predicts less */
-      int censored = (p->obs->flags[k] >> c & 1u) && prediction >= y[c];
+      int censored = fit_problem_censored(p, 3 * row + (size_t)c, prediction, y[c]);
       if (censored) r = 0.0;
       double rho1, root = p->sample_root ? p->sample_root[row] : 1.0;
       double rho = robust(p, r * r, &rho1);

@@ -163,6 +163,15 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
  * it holds the last image, whose log exposure is minus their sum). */
 int fit_problem_block_columns(void *user, size_t block, int *columns);
 
+/* Is residual i (observation i / 3 of those used, channel i % 3) censored:
+ * a clipped channel whose prediction is at or above what was seen (the
+ * true value is at least that, so no residual)? */
+static inline int fit_problem_censored(const fit_problem *p, size_t i, double prediction,
+                                       double measured) {
+  size_t k = p->index ? p->index[i / 3] : i / 3;
+  return (p->obs->flags[k] >> (i % 3) & 1u) && prediction >= measured;
+}
+
 /* The prediction (with scale and exposures) and the measurement of every
  * used observation and channel at the current values: 3 × count each. */
 cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,

@@ -67,7 +67,7 @@ cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result 
     for (int c = 0; c < 3; ++c) {
       size_t at = 3 * i + (size_t)c;
       double e = prediction[at] - measured[at];
-      if ((p->obs->flags[k] >> c & 1u) && e >= 0.0) {
+      if (fit_problem_censored(p, at, prediction[at], measured[at])) {
         ++r->censored; /* predicted at or above the clip level: no residual */
         continue;
       }
@@ -109,7 +109,7 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   size_t m = 0;
   for (size_t i = 0; s == CF_OK && i < n; ++i) {
     double e = prediction[i] - measured[i];
-    if ((p->obs->flags[(p->index ? p->index[i / 3] : i / 3)] >> (i % 3) & 1u) && e >= 0.0) continue;
+    if (fit_problem_censored(p, i, prediction[i], measured[i])) continue;
     double root = p->sample_root ? p->sample_root[i / 3] : 1.0;
     prediction[m] = fabs(e);
     measured[m++] = root * root; /* the weight (m <= i: nothing unread is overwritten) */
@@ -167,8 +167,7 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   if (s == CF_OK) s = fit_problem_predict(&p, prediction, measured, err);
   for (size_t i = 0; s == CF_OK && i < n; ++i) {
     double e = prediction[i] - measured[i];
-    size_t k = p.index ? p.index[i / 3] : i / 3;
-    if ((p.obs->flags[k] >> (i % 3) & 1u) && e >= 0.0) continue; /* censored */
+    if (fit_problem_censored(&p, i, prediction[i], measured[i])) continue;
     score->e2 += e * e;
     score->y2 += measured[i] * measured[i];
     ++score->used;
