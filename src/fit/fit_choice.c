@@ -104,24 +104,30 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
   }
   if (!has_noise && !(choice->sigma > 0.0))
     return cf_error_set(err, CF_ENUMERIC, "no model of the ladder could be fitted to choose from");
+  cf_fit_options o; /* the loss of the scores */
+  cf_fit_default_options(&o, CF_MODEL_LAMBERT);
+  o.loss = choice->loss;
+  o.loss_scale = choice->loss_scale;
   for (int m = 0; m < choice->count; ++m) {
     cf_fit_candidate *c = &choice->candidate[m];
     if (!c->ok) continue;
-    fit_score on_train, on_test;
-    cf_status s = fit_score_at(capture, train, &c->fit, choice->sigma, choice->loss,
-                               choice->loss_scale, &on_train, err);
-    if (s == CF_OK)
-      s = fit_score_at(capture, test, &c->fit, choice->sigma, choice->loss, choice->loss_scale,
-                       &on_test, err);
+    double train_cost, test_cost;
+    cf_fit_result on_train, on_test;
+    cf_status s = fit_score_at(capture, train, &c->fit, choice->sigma, &o, &train_cost, &on_train, err);
     if (s != CF_OK) return s;
+    cf_fit_result_free(&on_train);
+    s = fit_score_at(capture, test, &c->fit, choice->sigma, &o, &test_cost, &on_test, err);
+    if (s != CF_OK) return s;
+    size_t train_n = on_train.residuals + on_train.censored;
+    c->heldout_residuals = on_test.residuals + on_test.censored;
     c->parameters = c->fit.free_unknowns;
-    c->residuals = on_train.residuals;
-    c->cost = on_train.cost;
-    c->bic = 2.0 * on_train.cost + c->parameters * log((double)on_train.residuals);
-    c->heldout_residuals = on_test.residuals;
-    c->heldout_score = sqrt(2.0 * on_test.cost / (double)on_test.residuals);
-    c->heldout_rmse = on_test.used ? sqrt(on_test.e2 / (double)on_test.used) : NAN;
-    c->heldout_relative_rmse = on_test.y2 > 0.0 ? sqrt(on_test.e2 / on_test.y2) : NAN;
+    c->residuals = train_n;
+    c->cost = train_cost;
+    c->bic = 2.0 * train_cost + c->parameters * log((double)train_n);
+    c->heldout_score = sqrt(2.0 * test_cost / (double)c->heldout_residuals);
+    c->heldout_rmse = on_test.residuals ? on_test.rmse : NAN;
+    c->heldout_relative_rmse = on_test.relative_rmse;
+    cf_fit_result_free(&on_test);
   }
   return CF_OK;
 }
@@ -204,9 +210,9 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   result->ambiguous = c->fit.ambiguous;
   for (int i = 0; i < c->fit.warning_count; ++i) {
     int dup = 0;
-    for (int j = 0; j < result->warning_count; ++j) dup |= !strcmp(result->warnings[j], c->fit.warnings[i]);
-    if (!dup && result->warning_count < CF_FIT_MAX_WARNINGS)
-      memcpy(result->warnings[result->warning_count++], c->fit.warnings[i], sizeof result->warnings[0]);
+    for (int j = 0; j < result->warning_count; ++j)
+      dup |= !strcmp(result->warnings[j], c->fit.warnings[i]);
+    if (!dup) fit_add_warning(result, "%s", c->fit.warnings[i]);
   }
   return CF_OK;
 }

@@ -126,82 +126,55 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   return s;
 }
 
-/* The problem over a population at a fit's values, nothing free, with σ
- * as the fit had it (the noise model at the prediction, or `sigma`). */
-static cf_status problem_at(const cf_capture *capture, const fit_population *population,
-                            const cf_fit_result *fit, double sigma, cf_loss loss,
-                            double loss_scale, fit_problem *p, cf_error *err) {
-  cf_status s = fit_problem_init(p, capture, fit->model, population->index, population->count, err);
-  if (s != CF_OK) return s;
-  memcpy(p->params, fit->params, sizeof p->params);
-  p->log_scale = log(fit->scale);
-  for (size_t k = 0; k < p->images && fit->exposures; ++k) p->log_exposures[k] = log(fit->exposures[k]);
-  p->loss = loss;
-  p->loss_scale = loss_scale;
-  fit_problem_clear_unknowns(p);
-  s = fit_problem_finish(p, err);
-  if (s == CF_OK && fit_capture_has_noise(capture)) s = fit_problem_reweight(p, capture, err);
-  else if (s == CF_OK) fit_problem_set_sigma(p, capture, sigma);
-  if (s != CF_OK) fit_problem_release(p);
-  return s;
-}
-
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
-                       const cf_fit_result *fit, double sigma, cf_loss loss, double loss_scale,
-                       fit_score *score, cf_error *err) {
-  memset(score, 0, sizeof *score);
+                       const cf_fit_result *fit, double sigma, const cf_fit_options *o,
+                       double *cost, cf_fit_result *stats, cf_error *err) {
+  *stats = *fit;
+  stats->exposures = stats->image_rmse = stats->image_relative_rmse = NULL;
+  stats->residuals = stats->censored = stats->rejected = 0;
+  *cost = 0.0;
+  /* the problem at the fit's values, nothing free */
   fit_problem p;
-  cf_status s = problem_at(capture, population, fit, sigma, loss, loss_scale, &p, err);
+  cf_status s = fit_problem_init(&p, capture, fit->model, population->index, population->count, err);
   if (s != CF_OK) return s;
+  memcpy(p.params, fit->params, sizeof p.params);
+  p.log_scale = log(fit->scale);
+  for (size_t k = 0; k < p.images && fit->exposures; ++k) p.log_exposures[k] = log(fit->exposures[k]);
+  p.loss = o->loss;
+  p.loss_scale = o->loss_scale;
+  fit_problem_clear_unknowns(&p);
+  s = fit_problem_finish(&p, err);
+  if (s == CF_OK && fit_capture_has_noise(capture)) s = fit_problem_reweight(&p, capture, err);
+  else if (s == CF_OK) fit_problem_set_sigma(&p, capture, sigma);
   for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b) {
-    double cost;
-    if (!fit_problem_evaluate(&p, NULL, b, &cost, NULL, NULL)) /* x: nothing is free */
+    double block_cost;
+    if (!fit_problem_evaluate(&p, NULL, b, &block_cost, NULL, NULL)) /* x: nothing is free */
       s = cf_error_set(err, CF_ENUMERIC, "the %s fit cannot be evaluated on these observations",
                        cf_model_info_get(fit->model)->code);
-    score->cost += cost;
+    *cost += block_cost;
   }
-  size_t n = 3 * p.count;
-  double *prediction = s == CF_OK ? malloc(n * sizeof *prediction) : NULL;
-  double *measured = s == CF_OK ? malloc(n * sizeof *measured) : NULL;
-  if (s == CF_OK && (!prediction || !measured)) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) s = fit_problem_predict(&p, prediction, measured, err);
-  for (size_t i = 0; s == CF_OK && i < n; ++i) {
-    double e = prediction[i] - measured[i];
-    if (fit_problem_censored(&p, i, prediction[i], measured[i])) continue;
-    score->e2 += e * e;
-    score->y2 += measured[i] * measured[i];
-    ++score->used;
+  if (s == CF_OK) s = fit_statistics(&p, o, stats, err);
+  if (s == CF_OK && fit->exposures) {
+    stats->exposures = malloc(fit->images * sizeof *stats->exposures);
+    if (stats->exposures) memcpy(stats->exposures, fit->exposures, fit->images * sizeof *fit->exposures);
+    else s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
-  score->residuals = n;
-  free(prediction);
-  free(measured);
   fit_problem_release(&p);
+  if (s != CF_OK) cf_fit_result_free(stats);
   return s;
 }
 
 cf_status cf_fit_evaluate(const cf_capture *capture, const cf_fit_result *fit,
                           const unsigned char *use_image, const cf_fit_options *options,
                           cf_fit_result *stats, cf_error *err) {
-  *stats = *fit;
-  stats->exposures = stats->image_rmse = stats->image_relative_rmse = NULL;
-  stats->residuals = stats->censored = stats->rejected = 0;
+  memset(stats, 0, sizeof *stats);
   fit_population population;
   uint32_t *index;
+  double cost;
   cf_status s = fit_population_of_images(capture, use_image, &population, &index, err);
-  fit_problem p;
   if (s == CF_OK)
-    s = problem_at(capture, &population, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options->loss,
-                   options->loss_scale, &p, err);
-  if (s == CF_OK) {
-    s = fit_statistics(&p, options, stats, err);
-    fit_problem_release(&p);
-  }
-  if (s == CF_OK && fit->exposures) {
-    stats->exposures = malloc(fit->images * sizeof *stats->exposures);
-    if (stats->exposures) memcpy(stats->exposures, fit->exposures, fit->images * sizeof *fit->exposures);
-    else s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  }
+    s = fit_score_at(capture, &population, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options,
+                     &cost, stats, err);
   free(index);
-  if (s != CF_OK) cf_fit_result_free(stats);
   return s;
 }

@@ -17,19 +17,15 @@ cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result 
  * uncensored residuals at the current values. */
 cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err);
 
-/* A model's score on a population of observations at given values (the
- * model choice's training cost and held-out error). */
-typedef struct fit_score {
-  double cost;      /* ½ Σ ρ(r²), r in units of σ */
-  size_t residuals; /* residual terms, 3 per observation */
-  size_t used;      /* of which not censored */
-  double e2, y2;    /* Σ (prediction − y)² and Σ y² over those used */
-} fit_score;
-
-/* With the capture's noise model σ comes from the prediction (as in the
- * fit); without one, it is `sigma` for every residual. */
+/* A fit (its parameters, scale and exposures) on a population of the
+ * capture's observations: its cost ½ Σ ρ(r²), r in units of σ (the model
+ * choice's training cost and held-out score), and its residual statistics
+ * there (fit_statistics) into *stats, whose other fields are copied from
+ * fit and which owns its per-image arrays (cf_fit_result_free). With the
+ * capture's noise model σ comes from the prediction (as in the fit);
+ * without one, it is `sigma` for every residual. */
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
-                       const cf_fit_result *fit, double sigma, cf_loss loss, double loss_scale,
-                       fit_score *score, cf_error *err);
+                       const cf_fit_result *fit, double sigma, const cf_fit_options *o,
+                       double *cost, cf_fit_result *stats, cf_error *err);
 
 #endif /* CLAYFIT_FIT_RESIDUALS_H */
