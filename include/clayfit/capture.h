@@ -83,6 +83,20 @@ const cf_observations *cf_capture_observations(const cf_capture *capture);
 size_t cf_capture_image_count(const cf_capture *capture);
 const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index);
 
+/* The geometry of a point of observation i's pixel footprint: the surface
+ * point seen through pixel coordinates (pixel centre + (du, dv)), du and
+ * dv in pixels (the pixel's footprint is |du|, |dv| <= 1/2): its normal,
+ * its view direction, and every light slot's direction and irradiance
+ * (lights × 3 each, laid out as one observation's in cf_observations;
+ * zero for unused slots). For a normal map, normals between pixel centres
+ * are interpolated bilinearly. Returns 1, or 0 where that point does not
+ * see the sphere (or i is not an observation). What the fitter uses to
+ * integrate a lobe narrower than a pixel over the pixel (MODEL.md, "Image
+ * formation"). */
+int cf_capture_footprint_at(const cf_capture *capture, size_t i, double du, double dv,
+                            double normal[3], double view[3], double *light_dir,
+                            double *irradiance);
+
 /* What a capture says about itself, for the fitter and reports. */
 typedef struct cf_capture_summary {
   const char *name;
@@ -97,6 +111,14 @@ typedef struct cf_capture_summary {
   int has_noise;
   double noise_read, noise_shot; /* variance = read² + shot · radiance */
   size_t warnings;
+  /* relative radiometry made absolute by a reference target of known
+   * albedo (capture file: "reference"); radiometry_relative is then 0 and
+   * every light's irradiance has been multiplied by reference_scale */
+  int radiometry_from_reference;
+  double reference_scale;             /* s: median of measured / predicted radiance */
+  double reference_spread;            /* 1.4826 MAD / median of those ratios */
+  double reference_channel_scales[3]; /* the median ratio per channel */
+  size_t reference_pixels;            /* the target's pixels used */
 } cf_capture_summary;
 
 void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary);

@@ -59,11 +59,21 @@ typedef struct cf_fit_options {
                              the model choice's fit on a subsample */
   double start[CF_MAX_DIM];
   double start_scale;
+  double start_response;  /* γ to start from (0: 1), with use_start */
   int max_iterations;     /* per start; default 100 */
   int threads;            /* Ceres' threads; default 2 */
   const unsigned char *use_image; /* NULL: every image; else fit only the
                              observations of images k with use_image[k]
                              (for example to predict held-out lights) */
+  /* the pixel footprint (MODEL.md, "Image formation"): 0 (the default)
+   * integrates an observation over its pixel with S × S samples where a
+   * lobe is narrower than the pixel (cf_footprint_samples at the fit's
+   * parameters, to a relative error of footprint_tolerance, S at most
+   * CF_FIT_FOOTPRINT_MAX_SAMPLES); 1 evaluates pixel centres only; S >= 2
+   * samples every observation S × S (as `clayfit synth --supersample S`
+   * renders) */
+  int footprint;
+  double footprint_tolerance; /* default 2e-3 */
   double density;         /* the film's known thickness for the report of
                              density and absorption; NaN: the convention
                              (mean absorption 0.8) */
@@ -80,7 +90,7 @@ typedef struct cf_fit_start {
   int iterations;
 } cf_fit_start;
 
-enum { CF_FIT_MAX_STARTS = 32, CF_FIT_MAX_WARNINGS = 8 };
+enum { CF_FIT_MAX_STARTS = 32, CF_FIT_MAX_WARNINGS = 8, CF_FIT_FOOTPRINT_MAX_SAMPLES = 16 };
 #define CF_FIT_CORE_RADIUS_PX 3.0
 
 /* The stages of a fit, for their wall times. */
@@ -105,6 +115,11 @@ typedef struct cf_fit_result {
   double correlation[CF_MAX_DIM * CF_MAX_DIM]; /* free_count² */
   double scale, scale_sd;    /* the global scale s (1 for absolute radiometry) */
   int scale_fitted;
+  /* the response exponent γ of photos whose tone curve the capture says is
+   * unknown: the prediction is (s e_k Σ f E c_i)^γ in the decoded values
+   * (1, not fitted, when the tone curve is known) */
+  double response, response_sd;
+  int response_fitted;
   size_t images;
   double *exposures;         /* e_k per image (1 unless fitted), owned */
   double sigma;              /* σ when estimated from the residuals, else 0 */
@@ -121,6 +136,11 @@ typedef struct cf_fit_result {
   char termination[64];      /* of the last one */
   double solve_seconds;      /* Ceres' time in them */
   double stage_seconds[CF_FIT_STAGE_COUNT]; /* wall time of each stage */
+
+  /* the footprint integration of the fit on every observation */
+  size_t footprint_observations; /* integrated with S >= 2 */
+  size_t footprint_samples;      /* Σ S² over those */
+  int footprint_max;             /* the largest S (1: pixel centres only) */
 
   int free_unknowns;         /* everything estimated: model slots (fitted or
                                 at a bound), scale, exposures */

@@ -261,6 +261,34 @@ cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size
                                    const double *n, const double *l, const double *v, double *f,
                                    double *grad);
 
+/* ---------------------------------------------------------------------
+ * Pixel footprints (MODEL.md, "Image formation"): a pixel measures the
+ * mean of f over its footprint on the sphere, and where a lobe is narrower
+ * than the footprint its value at the pixel centre is not that mean.
+ * ------------------------------------------------------------------- */
+
+/* The angular width (radians of half-vector tilt) of the model's narrowest
+ * lobe at params: α = r² for a GGX lobe (M2, M3, M4's film and base), a
+ * for M3's GTR1 clear coat while its weight is above 0; INFINITY for M0
+ * and M1, which have none. */
+double cf_model_lobe_width(cf_model_id model, const double *params);
+
+/* Samples per side S (S × S on a centred grid) that integrate a lobe of
+ * angular width `width` over a pixel across which the normal turns by
+ * `delta` radians, whose centre's half vector is `theta_h` radians from
+ * the normal, to a relative error of about `tolerance`, between 1 and
+ * max_samples.
+ *
+ * The midpoint rule with spacing δ/S errs by (δ/S)²/24 (D_xx + D_yy) per
+ * pixel (the composite midpoint rule's leading term). GGX near its peak is
+ * D ∝ (α² + θ²)^-2 in the tilt θ, whose |D''/D| = |20θ² − 4α²|/(α² + θ²)²
+ * is at most 20/(α² + θ²); so the relative error is at most
+ * (δ/S)² · 5/(3 (α² + θ²)) with θ the smallest tilt inside the pixel
+ * (θ_h − δ/√2, at least 0), and S = ⌈δ √(5 / (3 tol (α² + θ²)))⌉.
+ * 1 for a non-positive delta or tolerance, or an infinite width. */
+int cf_footprint_samples(double width, double delta, double theta_h, double tolerance,
+                         int max_samples);
+
 #ifdef __cplusplus
 }
 #endif

@@ -27,6 +27,10 @@ typedef enum cf_synth_format {
   CF_SYNTH_EXR    /* 32-bit float linear OpenEXR */
 } cf_synth_format;
 
+/* With a reference card, the flash intensity the capture file gives is the
+ * true one times this factor: only the card can set the scale right. */
+#define CF_SYNTH_REFERENCE_FACTOR 0.37
+
 typedef struct cf_synth_options {
   cf_model_id model;
   double params[CF_MAX_DIM]; /* the sphere's material, in range */
@@ -46,6 +50,13 @@ typedef struct cf_synth_options {
   int write_masks;         /* 1: masks/ with the sphere's pixels */
   uint64_t seed;           /* texture layout and noise */
   double sphere_radius_m;  /* for the capture file's scale */
+  double reference_albedo; /* 0: none. In (0, 1]: a grey card of this albedo
+                              (Lambertian, 0.6 x 0.6 world units) lies on the
+                              ground in front of the sphere as image 0 sees
+                              it; the capture file then says "radiometry":
+                              "relative", gives the flash's intensity times
+                              CF_SYNTH_REFERENCE_FACTOR (wrong on purpose), and
+                              names the card as its "reference" */
   cf_progress_fn progress; /* may be NULL */
   void *progress_user;
 } cf_synth_options;

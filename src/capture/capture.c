@@ -25,9 +25,8 @@ void capture_warn(cf_capture *capture, const char *format, ...) {
   }
 }
 
-/* How image k's stored values become radiance. */
-static cf_decode image_decode(const cf_capture *capture, const cf_image_info *info,
-                              double exposure) {
+cf_decode capture_image_decode(const cf_capture *capture, const cf_image_info *info,
+                               double exposure) {
   const cf_capture_spec *spec = &capture->spec;
   cf_decode d;
   d.transfer = spec->transfer;
@@ -70,7 +69,7 @@ static cf_status load_image(cf_capture *capture, size_t k, cf_error *err) {
   if (s == CF_OK) {
     capture->raw_exposures[k] = exposure;
     capture->images[k].exposure = exposure;
-    cf_decode decode = image_decode(capture, &info, exposure);
+    cf_decode decode = capture_image_decode(capture, &info, exposure);
     s = capture_add_observations(capture, k, &image, mask.pixels ? &mask : NULL, &decode, err);
   }
   cf_image_free(&image);
@@ -131,7 +130,9 @@ static cf_status load(cf_capture *capture, const char *path, const cf_capture_op
   if (options && options->progress)
     options->progress(options->progress_user, "reading images", n, n);
   if (capture->spec.exposure == CF_EXPOSURE_EXIF) normalise_exif_exposures(capture);
-  return check_sphere_seen(capture, err);
+  if ((s = check_sphere_seen(capture, err)) != CF_OK) return s;
+  /* the observations' irradiance in absolute units from the reference */
+  return capture->spec.has_reference ? capture_apply_reference(capture, err) : CF_OK;
 }
 
 cf_status cf_capture_load(const char *path, const cf_capture_options *options, cf_capture **capture,
@@ -198,10 +199,16 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
   summary->sphere_radius = capture->radius;
   summary->sphere_rms_px = capture->rms_px;
   summary->silhouette_kept = capture->silhouette_kept;
-  summary->radiometry_relative = spec->radiometry_relative;
+  summary->radiometry_relative = spec->radiometry_relative && !capture->from_reference;
   summary->tone_curve_unknown = spec->tone_curve_unknown;
   summary->has_noise = spec->has_noise;
   summary->noise_read = spec->noise_read;
   summary->noise_shot = spec->noise_shot;
   summary->warnings = capture->num_warnings;
+  summary->radiometry_from_reference = capture->from_reference;
+  summary->reference_scale = capture->reference_scale;
+  summary->reference_spread = capture->reference_spread;
+  memcpy(summary->reference_channel_scales, capture->reference_channel_scales,
+         sizeof capture->reference_channel_scales);
+  summary->reference_pixels = capture->reference_pixels;
 }

@@ -46,6 +46,12 @@ struct cf_capture {
 
   char **warnings;
   size_t num_warnings;
+
+  /* the scale from the reference target (capture_reference.c), applied to
+   * every light and observation: the radiometry is then absolute */
+  int from_reference;
+  double reference_scale, reference_spread, reference_channel_scales[3];
+  size_t reference_pixels;
 };
 
 /* Add a warning (printf-style). Out of memory loses the warning only. */
@@ -54,6 +60,11 @@ void capture_warn(cf_capture *capture, const char *format, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* capture.c: how image k's stored values become radiance divided by its
+ * exposure e_k (the spec's encoding, black and clip levels). */
+cf_decode capture_image_decode(const cf_capture *capture, const cf_image_info *info,
+                               double exposure);
 
 /* capture_views.c: read the COLMAP model and match every image to it (or
  * set up the orthographic camera); fill views and images' names, paths. */
@@ -86,6 +97,12 @@ typedef struct surface_point {
 surface_hit capture_surface_at(const cf_capture *capture, size_t k, int x, int y,
                                surface_point *point);
 
+/* capture_surface.c: the same at continuous pixel coordinates (u, v)
+ * (pixel centres at +0.5); a normal map's normals are interpolated
+ * bilinearly between pixel centres. */
+surface_hit capture_surface_at_uv(const cf_capture *capture, size_t k, double u, double v,
+                                  surface_point *point);
+
 /* capture_surface.c: the pixel rectangle [x0, x1) × [y0, y1) of image k
  * that can see the sphere. */
 void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int height,
@@ -94,5 +111,11 @@ void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int 
 /* observations.c: decode image k and append its observations. */
 cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
                                    const cf_image *mask, const cf_decode *decode, cf_error *err);
+
+/* capture_reference.c: the absolute scale from the capture's reference
+ * target (spec.reference), measured in its image (which must have been
+ * loaded: its exposure is known) and applied to every light and every
+ * observation's irradiance. Call once, after every image is loaded. */
+cf_status capture_apply_reference(cf_capture *capture, cf_error *err);
 
 #endif /* CLAYFIT_CAPTURE_INTERNAL_H */

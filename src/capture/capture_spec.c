@@ -475,6 +475,113 @@ static cf_status read_lights(const json_t *root, const json_at *at, cf_capture_s
   return CF_OK;
 }
 
+/* ---- the reference target ---- */
+
+/* reference.region: four integers x0, y0, x1, y1 with x1 > x0 >= 0 and
+ * y1 > y0 >= 0 (the image's size is checked when it is read). */
+static cf_status read_region(const json_t *reference, const json_at *at, int region[4],
+                             cf_error *err) {
+  const json_t *array;
+  cf_status s = json_get_array(reference, at, "region", 1, &array, NULL, err);
+  if (s != CF_OK) return s;
+  json_at here = json_member_at(at, "region");
+  if (json_array_size(array) != 4)
+    return json_fail(&here, err, CF_EPARSE, "expected 4 integers [x0, y0, x1, y1], got %zu values",
+                     json_array_size(array));
+  for (size_t i = 0; i < 4; ++i) {
+    json_at element = json_element_at(&here, i);
+    const json_t *value = json_array_get(array, i);
+    if (!json_is_integer(value))
+      return json_fail(&element, err, CF_EPARSE, "expected an integer (pixels), got %s",
+                       json_is_real(value) ? "a fractional number" : json_type_name(value));
+    json_int_t x = json_integer_value(value);
+    if (x < 0 || x > 1 << 20)
+      return json_fail(&element, err, CF_ERANGE, "%lld is outside [0, %d]", (long long)x, 1 << 20);
+    region[i] = (int)x;
+  }
+  if (region[2] <= region[0] || region[3] <= region[1])
+    return json_fail(&here, err, CF_EPARSE,
+                     "[%d, %d, %d, %d] is empty: it needs x1 > x0 and y1 > y0", region[0],
+                     region[1], region[2], region[3]);
+  return CF_OK;
+}
+
+/* reference.albedo: one number or [r, g, b], each in (0, 1]. */
+static cf_status read_albedo(const json_t *reference, const json_at *at, double albedo[3],
+                             cf_error *err) {
+  const json_t *value = json_object_get(reference, "albedo");
+  json_at here = json_member_at(at, "albedo");
+  if (!value) return json_fail(at, err, CF_EPARSE, "missing required key 'albedo'");
+  cf_status s;
+  if (json_is_array(value)) {
+    s = json_get_numbers(reference, at, "albedo", 1, 3, -1e300, 1e300, albedo, NULL, err);
+  } else if (json_is_number(value)) {
+    s = json_as_number(value, &here, -1e300, 1e300, &albedo[0], err);
+    albedo[1] = albedo[2] = albedo[0];
+  } else {
+    return json_fail(&here, err, CF_EPARSE, "expected a number or [r, g, b], got %s",
+                     json_type_name(value));
+  }
+  if (s != CF_OK) return s;
+  for (int c = 0; c < 3; ++c)
+    if (!(albedo[c] > 0.0 && albedo[c] <= 1.0)) {
+      json_at element = json_element_at(&here, (size_t)c);
+      return json_fail(json_is_array(value) ? &element : &here, err, CF_ERANGE,
+                       "%.17g is outside (0, 1]: an albedo is a fraction of the light", albedo[c]);
+    }
+  return CF_OK;
+}
+
+static cf_status read_reference(const json_t *root, const json_at *at, cf_capture_spec *spec,
+                                cf_error *err) {
+  const json_t *reference;
+  cf_status s = json_get_object(root, at, "reference", 0, &reference, &spec->has_reference, err);
+  if (s != CF_OK || !spec->has_reference) return s;
+  json_at here = json_member_at(at, "reference");
+  cf_reference_spec *r = &spec->reference;
+  if (!spec->radiometry_relative)
+    return json_fail(&here, err, CF_EPARSE,
+                     "a reference target sets the scale of lights known only up to a factor: "
+                     "it needs \"radiometry\": \"relative\"");
+  static const char *const keys[] = {"image", "region", "albedo", "normal", "point", NULL};
+  const char *image;
+  if ((s = json_check_keys(reference, &here, keys, err)) != CF_OK ||
+      (s = json_get_string(reference, &here, "image", 1, &image, NULL, err)) != CF_OK)
+    return s;
+  r->image = spec->num_images;
+  for (size_t k = 0; k < spec->num_images; ++k)
+    if (strcmp(spec->image_names[k], image) == 0) {
+      r->image = k;
+      break;
+    }
+  if (r->image == spec->num_images) {
+    json_at image_at = json_member_at(&here, "image");
+    return json_fail(&image_at, err, CF_EPARSE,
+                     "'%s' is not one of the capture's %zu images (the first is '%s')", image,
+                     spec->num_images, spec->image_names[0]);
+  }
+  if ((s = read_region(reference, &here, r->region, err)) != CF_OK ||
+      (s = read_albedo(reference, &here, r->albedo, err)) != CF_OK ||
+      (s = read_unit_vector(reference, &here, "normal", r->normal, err)) != CF_OK ||
+      (s = json_get_numbers(reference, &here, "point", 0, 3, -1e300, 1e300, r->point, &r->has_point,
+                            err)) != CF_OK)
+    return s;
+  int positional = 0;
+  for (size_t i = 0; i < spec->num_lights; ++i)
+    positional |= spec->lights[i].kind == CF_LIGHT_SPEC_SINGLE &&
+                  spec->lights[i].light.kind != CF_LIGHT_DIRECTIONAL;
+  if (r->has_point && spec->camera == CF_CAMERA_KIND_ORTHOGRAPHIC) {
+    json_at point_at = json_member_at(&here, "point");
+    return json_fail(&point_at, err, CF_EPARSE,
+                     "an orthographic camera has no world positions: give no 'point'");
+  }
+  if (positional && !r->has_point)
+    return json_fail(&here, err, CF_EPARSE,
+                     "the lights include a point light or a flash, whose irradiance depends on "
+                     "where the target is: give 'point', a point on the target's plane (world)");
+  return CF_OK;
+}
+
 /* ---- the whole file ---- */
 
 cf_status cf_capture_spec_read(const char *path, cf_capture_spec *spec, cf_error *err) {
@@ -486,9 +593,9 @@ cf_status cf_capture_spec_read(const char *path, cf_capture_spec *spec, cf_error
   if (s != CF_OK) return s;
   char dir[MAX_PATH_LENGTH];
   json_at at = {path, NULL, NULL, 0};
-  static const char *const keys[] = {"clayfit_capture", "name",       "camera", "images",
-                                     "colour",          "radiometry", "noise",  "geometry",
-                                     "scale",           "lights",     NULL};
+  static const char *const keys[] = {"clayfit_capture", "name",       "camera",    "images",
+                                     "colour",          "radiometry", "noise",     "geometry",
+                                     "scale",           "lights",     "reference", NULL};
   long long version = 0;
   const char *name = "";
   if ((s = cf_path_dirname(path, dir, sizeof dir, err)) == CF_OK &&
@@ -505,6 +612,7 @@ cf_status cf_capture_spec_read(const char *path, cf_capture_spec *spec, cf_error
   if (s == CF_OK) s = read_scale(root, &at, spec, err);
   if (s == CF_OK) s = read_geometry(root, &at, spec, err);
   if (s == CF_OK) s = read_lights(root, &at, spec, err);
+  if (s == CF_OK) s = read_reference(root, &at, spec, err);
   json_decref(root);
   if (s != CF_OK) cf_capture_spec_free(spec);
   return s;

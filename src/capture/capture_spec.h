@@ -43,6 +43,18 @@ typedef struct cf_light_spec {
   int count;
 } cf_light_spec;
 
+/* A flat matte (Lambertian) target of known albedo seen in one image,
+ * which sets the absolute scale of a capture with relative radiometry
+ * (capture_reference.c). */
+typedef struct cf_reference_spec {
+  size_t image;     /* index into the capture's images */
+  int region[4];    /* x0, y0, x1, y1: the pixels x0 <= x < x1, y0 <= y < y1 */
+  double albedo[3]; /* in (0, 1] */
+  double normal[3]; /* unit, world */
+  double point[3];  /* on the target's plane, world (when has_point) */
+  int has_point;
+} cf_reference_spec;
+
 typedef struct cf_capture_spec {
   char *path; /* the capture file */
   char *dir;  /* its folder: relative paths start here */
@@ -76,6 +88,9 @@ typedef struct cf_capture_spec {
 
   size_t num_lights;
   cf_light_spec *lights;
+
+  int has_reference; /* only with radiometry "relative" */
+  cf_reference_spec reference;
 } cf_capture_spec;
 
 /* Read and check a capture file. Errors name the file and the JSON path

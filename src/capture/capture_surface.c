@@ -248,31 +248,55 @@ cf_status capture_load_surface(cf_capture *capture, const cf_capture_options *op
 
 /* ---- per pixel ---- */
 
-static surface_hit orthographic_at(const cf_capture *capture, int x, int y, surface_point *point) {
+/* The map's normal at continuous pixel coordinates (u, v): bilinear
+ * between the four nearest pixel centres where all four have a normal,
+ * else the normal of the pixel (u, v) falls in. */
+static int map_normal_at(const cf_image *map, double u, double v, double n[3]) {
+  double fx = u - 0.5, fy = v - 0.5;
+  int x0 = (int)floor(fx), y0 = (int)floor(fy);
+  double tx = fx - x0, ty = fy - y0, corner[4][3], sum[3] = {0.0, 0.0, 0.0};
+  int all = map_normal(map, x0, y0, corner[0]) && map_normal(map, x0 + 1, y0, corner[1]) &&
+            map_normal(map, x0, y0 + 1, corner[2]) && map_normal(map, x0 + 1, y0 + 1, corner[3]);
+  if (!all) return map_normal(map, (int)floor(u), (int)floor(v), n);
+  double w[4] = {(1.0 - tx) * (1.0 - ty), tx * (1.0 - ty), (1.0 - tx) * ty, tx * ty};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k < 3; ++k) sum[k] += w[c] * corner[c][k];
+  double length = sqrt(dot3(sum, sum));
+  if (!(length > 0.0)) return 0;
+  for (int k = 0; k < 3; ++k) n[k] = sum[k] / length;
+  return 1;
+}
+
+static surface_hit orthographic_at(const cf_capture *capture, double u, double v,
+                                   surface_point *point) {
   const cf_capture_spec *spec = &capture->spec;
   memset(point->position, 0, sizeof point->position);
   memcpy(point->view, spec->view, sizeof point->view);
   if (spec->geometry == CF_GEOMETRY_NORMAL_MAP) {
     const cf_image *map = &capture->normal_map;
+    int x = (int)floor(u), y = (int)floor(v);
+    if (x < 0 || y < 0 || x >= map->width || y >= map->height) return SURFACE_MISS;
     surface_hit hit = (surface_hit)capture->map_class[(size_t)y * (size_t)map->width + (size_t)x];
-    if (hit != SURFACE_MISS) map_normal(map, x, y, point->normal);
+    int centre = fabs(u - (x + 0.5)) == 0.0 && fabs(v - (y + 0.5)) == 0.0;
+    if (hit != SURFACE_MISS &&
+        !(centre ? map_normal(map, x, y, point->normal) : map_normal_at(map, u, v, point->normal)))
+      return SURFACE_MISS;
     return hit;
   }
   const cf_ellipse *circle = &capture->circle;
-  double u = x + 0.5, v = y + 0.5;
   if (!cf_sphere_normal_orthographic(circle, u, v, point->normal)) return SURFACE_MISS;
   double r = 0.5 * (circle->a + circle->b);
   double distance = hypot(u - circle->cx, v - circle->cy);
   return r - distance >= spec->margin_px ? SURFACE_HIT : SURFACE_MARGIN;
 }
 
-/* COLMAP camera: the first intersection of pixel (x, y)'s ray with the
- * sphere; the margin measured as the angle between the ray and the
- * sphere's tangent cone, times the focal length. */
-static surface_hit perspective_at(const cf_capture *capture, size_t k, int x, int y,
+/* COLMAP camera: the first intersection of the ray through pixel
+ * coordinates (u, v) with the sphere; the margin measured as the angle
+ * between the ray and the sphere's tangent cone, times the focal length. */
+static surface_hit perspective_at(const cf_capture *capture, size_t k, double u, double v,
                                   surface_point *point) {
   const capture_view *view = &capture->views[k];
-  double uv[2] = {x + 0.5, y + 0.5}, ray_camera[3], d[3];
+  double uv[2] = {u, v}, ray_camera[3], d[3];
   if (!cf_camera_unproject(view->camera, uv, ray_camera)) return SURFACE_MISS;
   camera_to_world(view->r, ray_camera, d);
   double oc[3] = {view->c[0] - capture->center[0], view->c[1] - capture->center[1],
@@ -297,11 +321,16 @@ static surface_hit perspective_at(const cf_capture *capture, size_t k, int x, in
                                                                               : SURFACE_MARGIN;
 }
 
+surface_hit capture_surface_at_uv(const cf_capture *capture, size_t k, double u, double v,
+                                  surface_point *point) {
+  if (capture->spec.camera == CF_CAMERA_KIND_ORTHOGRAPHIC)
+    return orthographic_at(capture, u, v, point);
+  return perspective_at(capture, k, u, v, point);
+}
+
 surface_hit capture_surface_at(const cf_capture *capture, size_t k, int x, int y,
                                surface_point *point) {
-  if (capture->spec.camera == CF_CAMERA_KIND_ORTHOGRAPHIC)
-    return orthographic_at(capture, x, y, point);
-  return perspective_at(capture, k, x, y, point);
+  return capture_surface_at_uv(capture, k, x + 0.5, y + 0.5, point);
 }
 
 void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int height,

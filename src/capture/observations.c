@@ -2,6 +2,7 @@
  * sphere clear of its silhouette (and is inside the mask, if any), decode
  * the photo's value to linear radiance and record the observation: normal,
  * view, every light's direction and irradiance, RGB, flags. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,14 +42,46 @@ static int in_mask(const cf_image *mask, int x, int y) {
          0.5f;
 }
 
+/* Every light slot's direction and irradiance at a surface point seen in
+ * image k (zero for the slots the image does not use); 1 if some light
+ * reaches it (n·l > 0). */
+static int lights_at(const cf_capture *capture, size_t k, const surface_point *point,
+                     double *light_dir, double *irradiance) {
+  const capture_view *view = &capture->views[k];
+  const int lights = capture->light_counts[k];
+  const cf_light *image_lights = capture->lights + k * (size_t)capture->max_lights;
+  int lit = 0;
+  for (int j = 0; j < capture->obs.lights; ++j) {
+    double *l = light_dir + 3 * (size_t)j, *e = irradiance + 3 * (size_t)j;
+    memset(l, 0, 3 * sizeof *l);
+    memset(e, 0, 3 * sizeof *e);
+    if (j >= lights || !cf_light_at(&image_lights[j], view->r, view->c, point->position, l, e))
+      continue;
+    lit |= l[0] * point->normal[0] + l[1] * point->normal[1] + l[2] * point->normal[2] > 0.0;
+  }
+  return lit;
+}
+
+int cf_capture_footprint_at(const cf_capture *capture, size_t i, double du, double dv,
+                            double normal[3], double view[3], double *light_dir,
+                            double *irradiance) {
+  const cf_observations *o = &capture->obs;
+  if (i >= o->count || !isfinite(du) || !isfinite(dv)) return 0;
+  size_t k = o->image[i];
+  surface_point point;
+  double u = (double)o->pixel[2 * i] + du, v = (double)o->pixel[2 * i + 1] + dv;
+  if (capture_surface_at_uv(capture, k, u, v, &point) == SURFACE_MISS) return 0;
+  memcpy(normal, point.normal, sizeof point.normal);
+  memcpy(view, point.view, sizeof point.view);
+  lights_at(capture, k, &point, light_dir, irradiance);
+  return 1;
+}
+
 cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
                                    const cf_image *mask, const cf_decode *decode, cf_error *err) {
   cf_observations *o = &capture->obs;
   cf_capture_image *info = &capture->images[k];
-  const capture_view *view = &capture->views[k];
-  const int lights = capture->light_counts[k];
   const size_t slots = (size_t)o->lights;
-  const cf_light *image_lights = capture->lights + k * (size_t)capture->max_lights;
   int bounds[4];
   capture_surface_bounds(capture, k, image->width, image->height, bounds);
   cf_status s =
@@ -66,16 +99,8 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
       const float *stored =
           image->pixels + ((size_t)y * (size_t)image->width + (size_t)x) * (size_t)image->channels;
       unsigned clipped = cf_decode_pixel(decode, stored, image->channels, o->rgb + 3 * i);
-      int lit = 0;
-      for (int j = 0; j < (int)slots; ++j) {
-        double *l = o->light_dir + 3 * (slots * i + (size_t)j);
-        double *e = o->irradiance + 3 * (slots * i + (size_t)j);
-        memset(l, 0, 3 * sizeof *l);
-        memset(e, 0, 3 * sizeof *e);
-        if (j >= lights || !cf_light_at(&image_lights[j], view->r, view->c, point.position, l, e))
-          continue;
-        lit |= l[0] * point.normal[0] + l[1] * point.normal[1] + l[2] * point.normal[2] > 0.0;
-      }
+      int lit = lights_at(capture, k, &point, o->light_dir + 3 * slots * i,
+                          o->irradiance + 3 * slots * i);
       memcpy(o->normal + 3 * i, point.normal, sizeof point.normal);
       memcpy(o->view + 3 * i, point.view, sizeof point.view);
       o->flags[i] = (uint8_t)(clipped | (lit ? 0u : CF_OBS_UNLIT));

@@ -19,6 +19,13 @@
 
 #define SYNTH_PI 3.14159265358979323846
 
+/* The reference card (--reference): a square on the ground between the
+ * sphere and camera 0 (azimuth 0), where that camera sees the ground in
+ * front of the sphere; its region in image 0 stays this many pixels inside
+ * the card's edges. */
+static const double card_center[2] = {0.7, 0.0}, card_half = 0.3;
+enum { CARD_MARGIN_PX = 2, MIN_CARD_PIXELS = 16 };
+
 void cf_synth_default_options(cf_synth_options *o) {
   memset(o, 0, sizeof *o);
   o->model = CF_MODEL_CLAY;
@@ -120,6 +127,7 @@ typedef struct render_job {
   cf_camera camera;
   synth_camera *cameras;
   double intensity;
+  int card_region[4]; /* the reference card's pixels in image 0 */
   pthread_mutex_t lock;
   int next, done;
   cf_status status;
@@ -128,6 +136,32 @@ typedef struct render_job {
 
 static const char *extension(cf_synth_format format) {
   return format == CF_SYNTH_EXR ? "exr" : "png";
+}
+
+/* The scene as camera cam sees it, lit by its flash. */
+static void make_scene(const render_job *job, const synth_camera *cam, synth_scene *scene) {
+  const cf_synth_options *o = job->options;
+  memset(scene, 0, sizeof *scene);
+  scene->model = o->model;
+  scene->params = o->params;
+  scene->intensity = job->intensity;
+  scene->seed = o->seed;
+  for (int i = 0; i < 3; ++i) /* the flash: C + Rᵀ t_flash */
+    scene->light[i] = cam->c[i] + cam->r[i] * o->flash_offset[0] +
+                      cam->r[3 + i] * o->flash_offset[1] + cam->r[6 + i] * o->flash_offset[2];
+  scene->card_albedo = o->reference_albedo;
+  scene->card_center[0] = card_center[0];
+  scene->card_center[1] = card_center[1];
+  scene->card_half = card_half;
+}
+
+/* The world ray of pixel coordinates uv of camera cam. */
+static void pixel_ray(const render_job *job, const synth_camera *cam, const double uv[2],
+                      double d[3]) {
+  double ray[3];
+  cf_camera_unproject(&job->camera, uv, ray);
+  for (int k = 0; k < 3; ++k)
+    d[k] = cam->r[k] * ray[0] + cam->r[3 + k] * ray[1] + cam->r[6 + k] * ray[2];
 }
 
 /* The radiance of pixel (x, y): S×S samples on a centred grid where the
@@ -186,10 +220,8 @@ static float stored_value(const cf_synth_options *o, double radiance, cf_rng *rn
 static cf_status render_image(render_job *job, int k, cf_error *err) {
   const cf_synth_options *o = job->options;
   synth_camera *cam = &job->cameras[k];
-  synth_scene scene = {o->model, o->params, {0.0, 0.0, 0.0}, job->intensity, o->seed};
-  for (int i = 0; i < 3; ++i) /* the flash: C + Rᵀ t_flash */
-    scene.light[i] = cam->c[i] + cam->r[i] * o->flash_offset[0] +
-                     cam->r[3 + i] * o->flash_offset[1] + cam->r[6 + i] * o->flash_offset[2];
+  synth_scene scene;
+  make_scene(job, cam, &scene);
   cf_image image = {0}, mask = {0};
   cf_status s = cf_image_alloc(&image, o->width, o->height, 3, err);
   if (s == CF_OK && o->write_masks) s = cf_image_alloc(&mask, o->width, o->height, 1, err);
@@ -280,6 +312,82 @@ static cf_status write_json(const char *dir, const char *name, json_t *doc, cf_e
   return s;
 }
 
+/* ---- the reference card's region in image 0 ---- */
+
+/* Does the ray through pixel coordinates (u, v) of camera 0 see the card? */
+static int sees_card(const render_job *job, const synth_scene *scene, double u, double v) {
+  double uv[2] = {u, v}, d[3], radiance[3];
+  pixel_ray(job, &job->cameras[0], uv, d);
+  return synth_shade(scene, job->cameras[0].c, d, radiance) == SYNTH_CARD;
+}
+
+/* Pixel (x, y) with CARD_MARGIN_PX around it inside the card's image (the
+ * card's image is convex, so its corners decide). */
+static int card_pixel(const render_job *job, const synth_scene *scene, int x, int y) {
+  const double m = CARD_MARGIN_PX;
+  const cf_synth_options *o = job->options;
+  if (x < 0 || y < 0 || x >= o->width || y >= o->height) return 0;
+  return sees_card(job, scene, x - m, y - m) && sees_card(job, scene, x + 1 + m, y - m) &&
+         sees_card(job, scene, x - m, y + 1 + m) && sees_card(job, scene, x + 1 + m, y + 1 + m);
+}
+
+/* The region [x0, x1) x [y0, y1) of image 0 inside the card: from the
+ * pixel of the card's centre, grown one row or column at a time while the
+ * new pixels stay inside; then every pixel's point of the card checked to
+ * be lit by flash 0 (not in the sphere's shadow). */
+static cf_status card_region(const render_job *job, int region[4], cf_error *err) {
+  const synth_camera *cam = &job->cameras[0];
+  synth_scene scene;
+  make_scene(job, cam, &scene);
+  double centre[3] = {card_center[0], card_center[1], SYNTH_GROUND_Z}, xc[3], uv[2] = {-1, -1};
+  for (int i = 0; i < 3; ++i)
+    xc[i] = cam->r[3 * i] * centre[0] + cam->r[3 * i + 1] * centre[1] +
+            cam->r[3 * i + 2] * centre[2] + cam->t[i];
+  cf_camera_project(&job->camera, xc, uv);
+  int x = (int)floor(uv[0]), y = (int)floor(uv[1]);
+  if (!card_pixel(job, &scene, x, y))
+    return cf_error_set(err, CF_EINVAL,
+                        "--reference: image 0 (%d x %d pixels) does not see the card's centre "
+                        "clear of its edges",
+                        job->options->width, job->options->height);
+  int r[4] = {x, y, x + 1, y + 1};
+  for (int grown = 1; grown;) {
+    grown = 0;
+    int ok = 1; /* left, right: a column; top, bottom: a row */
+    for (int j = r[1]; ok && j < r[3]; ++j) ok = card_pixel(job, &scene, r[0] - 1, j);
+    if (ok) --r[0], grown = 1;
+    ok = 1;
+    for (int j = r[1]; ok && j < r[3]; ++j) ok = card_pixel(job, &scene, r[2], j);
+    if (ok) ++r[2], grown = 1;
+    ok = 1;
+    for (int i = r[0]; ok && i < r[2]; ++i) ok = card_pixel(job, &scene, i, r[1] - 1);
+    if (ok) --r[1], grown = 1;
+    ok = 1;
+    for (int i = r[0]; ok && i < r[2]; ++i) ok = card_pixel(job, &scene, i, r[3]);
+    if (ok) ++r[3], grown = 1;
+  }
+  int pixels = (r[2] - r[0]) * (r[3] - r[1]);
+  if (pixels < MIN_CARD_PIXELS)
+    return cf_error_set(err, CF_EINVAL,
+                        "--reference: the card covers only %d pixels of image 0 clear of its "
+                        "edges, fewer than %d: use a larger --size",
+                        pixels, MIN_CARD_PIXELS);
+  for (int j = r[1]; j < r[3]; ++j)
+    for (int i = r[0]; i < r[2]; ++i) {
+      double pixel[2] = {i + 0.5, j + 0.5}, d[3];
+      pixel_ray(job, cam, pixel, d);
+      double t = (SYNTH_GROUND_Z - cam->c[2]) / d[2];
+      double point[3] = {cam->c[0] + t * d[0], cam->c[1] + t * d[1], SYNTH_GROUND_Z};
+      if (synth_in_shadow(point, scene.light))
+        return cf_error_set(err, CF_EINVAL,
+                            "--reference: pixel (%d, %d) of the card in image 0 is in the "
+                            "sphere's shadow",
+                            i, j);
+    }
+  memcpy(region, r, sizeof r);
+  return CF_OK;
+}
+
 static cf_status write_capture_file(const char *dir, const render_job *job, cf_error *err) {
   const cf_synth_options *o = job->options;
   const cf_model_info *m = cf_model_info_get(o->model);
@@ -296,21 +404,35 @@ static cf_status write_capture_file(const char *dir, const render_job *job, cf_e
           ? json_pack("{s:s, s:f}", "type", "sphere_from_silhouettes", "margin_px", 2.0)
           : json_pack("{s:s, s:[f, f, f], s:f, s:f}", "type", "sphere", "center", 0.0, 0.0, 0.0,
                       "radius", 1.0, "margin_px", 2.0);
+  /* with a reference card, the lights are given wrong by a known factor */
+  const int reference = o->reference_albedo > 0.0;
+  const double intensity = reference ? CF_SYNTH_REFERENCE_FACTOR * job->intensity : job->intensity;
   json_t *flash = json_pack("{s:s, s:[f, f, f], s:o}", "type", "flash", "offset",
                             o->flash_offset[0], o->flash_offset[1], o->flash_offset[2], "intensity",
-                            rgb_json(job->intensity, job->intensity, job->intensity));
+                            rgb_json(intensity, intensity, intensity));
   char name[128];
   snprintf(name, sizeof name, "synthetic %s (%s), %d images", m->name, m->code, o->images);
-  json_t *doc = json_pack(
-      "{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:o, s:{s:f}, s:[o]}", "clayfit_capture", 1,
-      "name", name, "camera", "type", "colmap", "model", "sparse/0", "images", images, "colour",
-      "encoding", o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry", "absolute",
-      "geometry", geometry, "scale", "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+  json_t *doc = json_pack("{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:o, s:{s:f}, s:[o]}",
+                          "clayfit_capture", 1, "name", name, "camera", "type", "colmap", "model",
+                          "sparse/0", "images", images, "colour", "encoding",
+                          o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry",
+                          reference ? "relative" : "absolute", "geometry", geometry, "scale",
+                          "sphere_radius_m", o->sphere_radius_m, "lights", flash);
   /* the noise model, when there is noise (without one the fit estimates σ
    * from its residuals) */
   if (o->read_noise > 0.0 || o->shot_noise > 0.0)
     json_object_set_new(doc, "noise",
                         json_pack("{s:f, s:f}", "read", o->read_noise, "shot", o->shot_noise));
+  if (reference) {
+    char image[32];
+    snprintf(image, sizeof image, "%03d.%s", 0, extension(o->format));
+    json_object_set_new(
+        doc, "reference",
+        json_pack("{s:s, s:[i, i, i, i], s:f, s:[f, f, f], s:[f, f, f]}", "image", image, "region",
+                  job->card_region[0], job->card_region[1], job->card_region[2],
+                  job->card_region[3], "albedo", o->reference_albedo, "normal", 0.0, 0.0, 1.0,
+                  "point", 0.0, 0.0, SYNTH_GROUND_Z));
+  }
   return write_json(dir, "capture.json", doc, err);
 }
 
@@ -334,6 +456,13 @@ static cf_status write_truth(const char *dir, const render_job *job, cf_error *e
       formats[o->format], "noise", "read", o->read_noise, "shot", o->shot_noise, "seed",
       (json_int_t)o->seed, "width", o->width, "height", o->height, "focal_px", o->focal_px,
       "distance", o->distance);
+  if (o->reference_albedo > 0.0)
+    json_object_set_new(
+        doc, "reference",
+        json_pack("{s:f, s:[f, f, f], s:f, s:f, s:[i, i, i, i]}", "albedo", o->reference_albedo,
+                  "center", card_center[0], card_center[1], SYNTH_GROUND_Z, "size", 2.0 * card_half,
+                  "intensity_factor", CF_SYNTH_REFERENCE_FACTOR, "region", job->card_region[0],
+                  job->card_region[1], job->card_region[2], job->card_region[3]));
   return write_json(dir, "truth.json", doc, err);
 }
 
@@ -355,6 +484,9 @@ static cf_status check_options(const cf_synth_options *o, cf_error *err) {
   if (!(o->read_noise >= 0.0) || !(o->shot_noise >= 0.0) || !(o->flash_intensity >= 0.0) ||
       !isfinite(o->read_noise + o->shot_noise + o->flash_intensity))
     return cf_error_set(err, CF_ERANGE, "noise and flash intensity must be finite and >= 0");
+  if (!(o->reference_albedo >= 0.0 && o->reference_albedo <= 1.0))
+    return cf_error_set(err, CF_ERANGE, "reference albedo: %g is outside (0, 1] (0: no card)",
+                        o->reference_albedo);
   return CF_OK;
 }
 
@@ -380,6 +512,10 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
   job.cameras = calloc((size_t)o->images, sizeof *job.cameras);
   if (!job.cameras) return cf_error_set(err, CF_ENOMEM, "out of memory");
   for (int k = 0; k < o->images; ++k) orbit_camera(o, k, &job.cameras[k]);
+  if (o->reference_albedo > 0.0 && (s = card_region(&job, job.card_region, err)) != CF_OK) {
+    free(job.cameras);
+    return s;
+  }
   pthread_mutex_init(&job.lock, NULL);
   enum { THREADS = 2 };
   pthread_t threads[THREADS];

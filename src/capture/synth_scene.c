@@ -4,7 +4,7 @@
 
 #include <math.h>
 
-static const double ground_z = -1.0;
+static const double ground_z = SYNTH_GROUND_Z;
 static const double backdrop_radius = 6.0, backdrop_top = 5.0;
 
 static double dot3(const double a[3], const double b[3]) {
@@ -66,8 +66,7 @@ static void texture(double s, double t, uint64_t seed, double albedo[3]) {
     albedo[c] = grey * (0.8 + 0.2 * value_noise(s * 0.7, t * 0.7, seed + 31 + (uint64_t)c));
 }
 
-/* Is the segment from x to the light blocked by the sphere? */
-static int in_shadow(const double x[3], const double light[3]) {
+int synth_in_shadow(const double x[3], const double light[3]) {
   double d[3] = {light[0] - x[0], light[1] - x[1], light[2] - x[2]};
   double length = sqrt(dot3(d, d));
   for (int k = 0; k < 3; ++k) d[k] /= length;
@@ -80,7 +79,7 @@ static void lambert(const synth_scene *scene, const double x[3], const double n[
                     const double albedo[3], double radiance[3]) {
   double l[3] = {scene->light[0] - x[0], scene->light[1] - x[1], scene->light[2] - x[2]};
   double d2 = dot3(l, l), cos_i = dot3(l, n) / sqrt(d2);
-  double e = cos_i > 0.0 && !in_shadow(x, scene->light) ? scene->intensity / d2 * cos_i : 0.0;
+  double e = cos_i > 0.0 && !synth_in_shadow(x, scene->light) ? scene->intensity / d2 * cos_i : 0.0;
   for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / 3.14159265358979323846 * e;
 }
 
@@ -127,7 +126,13 @@ synth_surface synth_shade(const synth_scene *scene, const double origin[3], cons
     }
     case SYNTH_GROUND: {
       static const double up[3] = {0.0, 0.0, 1.0};
-      texture(6.0 * x[0], 6.0 * x[1], scene->seed, albedo);
+      if (scene->card_albedo > 0.0 && fabs(x[0] - scene->card_center[0]) <= scene->card_half &&
+          fabs(x[1] - scene->card_center[1]) <= scene->card_half) {
+        albedo[0] = albedo[1] = albedo[2] = scene->card_albedo;
+        hit = SYNTH_CARD;
+      } else {
+        texture(6.0 * x[0], 6.0 * x[1], scene->seed, albedo);
+      }
       lambert(scene, x, up, albedo, radiance);
       break;
     }
@@ -137,6 +142,7 @@ synth_surface synth_shade(const synth_scene *scene, const double origin[3], cons
       lambert(scene, x, inward, albedo, radiance);
       break;
     }
+    case SYNTH_CARD: /* not a hit yet: the card is found on the ground */
     case SYNTH_NOTHING:
       break;
   }

@@ -13,7 +13,8 @@ typedef enum synth_surface {
   SYNTH_NOTHING,
   SYNTH_SPHERE,
   SYNTH_GROUND,
-  SYNTH_BACKDROP
+  SYNTH_BACKDROP,
+  SYNTH_CARD /* the reference card on the ground */
 } synth_surface;
 
 typedef struct synth_scene {
@@ -22,7 +23,14 @@ typedef struct synth_scene {
   double light[3];  /* the flash's world position */
   double intensity; /* its radiant intensity (grey) */
   uint64_t seed;    /* texture layout */
+  /* a grey Lambertian card on the ground (card_albedo 0: none): the
+   * square |x - card_center[0]| <= card_half, |y - card_center[1]| <=
+   * card_half of the plane z = -1 */
+  double card_albedo, card_center[2], card_half;
 } synth_scene;
+
+/* The ground plane's height (world z). */
+#define SYNTH_GROUND_Z (-1.0)
 
 /* Shade the ray origin + t d (d unit): the radiance it carries back, per
  * channel (MODEL.md: L = f E c_i, here with E = I/|p - x|²; the ground and
@@ -30,6 +38,9 @@ typedef struct synth_scene {
  * the sphere). Returns what the ray hit first. */
 synth_surface synth_shade(const synth_scene *scene, const double origin[3], const double d[3],
                           double radiance[3]);
+
+/* Is the segment from x to the light blocked by the sphere? */
+int synth_in_shadow(const double x[3], const double light[3]);
 
 /* The distance along the ray to the sphere, or a negative number if it
  * misses (the first hit; the origin must be outside the sphere). */

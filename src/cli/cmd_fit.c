@@ -20,6 +20,7 @@ static void fit_usage(FILE *out) {
           "usage: clayfit fit CAPTURE -o OUTDIR [--model auto|M] [--hold name=value ...]\n"
           "                   [--free name ...] [--loss huber|cauchy|none] [--loss-scale K]\n"
           "                   [--fit-exposures] [--no-multistart] [--density D]\n"
+          "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
           "                   [--max-iterations N] [--threads N]\n\n"
           "Fits the model to the capture's observations and writes OUTDIR/fit.json\n"
           "(data_schema/fit.schema.json): parameters with units, standard deviations and\n"
@@ -39,6 +40,12 @@ static void fit_usage(FILE *out) {
           "  --no-multistart     start from the closed-form albedo and defaults only\n"
           "  --density D         the film's known thickness, for density and absorption\n"
           "                      (default: MODEL.md's convention, mean absorption 0.8)\n"
+          "  --footprint F       pixel footprints: auto (default) integrates a pixel with\n"
+          "                      S x S samples where a lobe is narrower than the pixel;\n"
+          "                      centre evaluates pixel centres only; a number S samples\n"
+          "                      every pixel S x S (as synth --supersample S renders)\n"
+          "  --footprint-tolerance T  auto's relative error of a lobe over a pixel\n"
+          "                      (default 0.002)\n"
           "  --max-iterations N  per solve (default 100)\n"
           "  --threads N         solver threads (default 2)\n");
 }
@@ -52,8 +59,10 @@ static cf_status apply_holds(cf_fit_options *o, const char **holds, int hold_cou
   cf_status s = CF_OK;
   for (int i = 0; s == CF_OK && i < hold_count; ++i) {
     s = cli_apply_param(o->model, "--hold", holds[i], o->hold_value, given, err);
-    if (known && s == CF_ENOTFOUND) s = CF_OK;
-    else if (known && s == CF_OK) known[i] = 1;
+    if (known && s == CF_ENOTFOUND)
+      s = CF_OK;
+    else if (known && s == CF_OK)
+      known[i] = 1;
   }
   for (int k = 0; k < CF_MAX_DIM; ++k) o->hold[k] = given[k];
   for (int i = 0; s == CF_OK && i < free_count; ++i) {
@@ -79,6 +88,8 @@ typedef struct fit_settings {
   cf_loss loss;
   double loss_scale, density;
   int fit_exposures, multistart, max_iterations, threads;
+  int footprint;
+  double footprint_tolerance;
 } fit_settings;
 
 static cf_status model_options(cf_model_id model, const fit_settings *set, const char **holds,
@@ -92,6 +103,8 @@ static cf_status model_options(cf_model_id model, const fit_settings *set, const
   o->max_iterations = set->max_iterations;
   o->threads = set->threads;
   o->density = set->density;
+  o->footprint = set->footprint;
+  o->footprint_tolerance = set->footprint_tolerance;
   return apply_holds(o, holds, hold_count, frees, free_count, known, err);
 }
 
@@ -104,14 +117,15 @@ static cf_status ladder_options(const fit_settings *set, const char **holds, int
   int known[2 * MAX_ASSIGNMENTS] = {0};
   cf_status s = CF_OK;
   for (int m = 0; s == CF_OK && m < CF_MODEL_COUNT; ++m)
-    s = model_options((cf_model_id)m, set, holds, hold_count, frees, free_count, known,
-                      &options[m], err);
+    s = model_options((cf_model_id)m, set, holds, hold_count, frees, free_count, known, &options[m],
+                      err);
   for (int i = 0; s == CF_OK && i < hold_count + free_count; ++i) {
     if (known[i]) continue;
     const char *text = i < hold_count ? holds[i] : frees[i - hold_count];
     const char *equals = strchr(text, '=');
     int length = equals ? (int)(equals - text) : (int)strlen(text);
-    s = cf_error_set(err, CF_ENOTFOUND, "%s %.*s: no model of the ladder has a parameter of that "
+    s = cf_error_set(err, CF_ENOTFOUND,
+                     "%s %.*s: no model of the ladder has a parameter of that "
                      "name (see clayfit models)",
                      i < hold_count ? "--hold" : "--free", length, text);
   }
@@ -136,14 +150,16 @@ static void print_choice(const cf_fit_choice *choice) {
 
 static void print_summary(const cf_fit_result *r, const char *path) {
   const cf_model_info *m = cf_model_info_get(r->model);
-  printf("model %s (%s): relative RMSE %.4g %% over %zu residuals (%zu censored, %zu beyond "
-         "the robust loss), %d iterations, %s\n",
-         m->code, m->name, 100.0 * r->relative_rmse, r->residuals, r->censored, r->rejected,
-         r->iterations, r->termination);
-  printf("  without the highlight cores (%g px around each image's brightest pixel): %.4g %%; "
-         "inside them: %.4g %% over %zu residuals\n",
-         CF_FIT_CORE_RADIUS_PX, 100.0 * r->rest_relative_rmse, 100.0 * r->core_relative_rmse,
-         r->core_residuals);
+  printf(
+      "model %s (%s): relative RMSE %.4g %% over %zu residuals (%zu censored, %zu beyond "
+      "the robust loss), %d iterations, %s\n",
+      m->code, m->name, 100.0 * r->relative_rmse, r->residuals, r->censored, r->rejected,
+      r->iterations, r->termination);
+  printf(
+      "  without the highlight cores (%g px around each image's brightest pixel): %.4g %%; "
+      "inside them: %.4g %% over %zu residuals\n",
+      CF_FIT_CORE_RADIUS_PX, 100.0 * r->rest_relative_rmse, 100.0 * r->core_relative_rmse,
+      r->core_residuals);
   for (int j = 0; j < m->param_count; ++j) {
     const cf_param_info *info = cf_param_info_get(m->params[j]);
     int k = m->offsets[j];
@@ -159,22 +175,32 @@ static void print_summary(const cf_fit_result *r, const char *path) {
     printf("\n");
   }
   if (r->scale_fitted) printf("  %-18s %.6g ± %.2g\n", "scale", r->scale, r->scale_sd);
+  if (r->response_fitted)
+    printf("  %-18s %.6g ± %.2g  (the photos' unknown tone curve)\n", "response exponent",
+           r->response, r->response_sd);
   printf("written: %s\n", path);
 }
 
 int cmd_fit(int argc, char **argv, cli_context *ctx) {
-  static const struct option options[] = {
-      {"output", required_argument, NULL, 'o'},    {"model", required_argument, NULL, 'm'},
-      {"hold", required_argument, NULL, 'H'},      {"free", required_argument, NULL, 'F'},
-      {"loss", required_argument, NULL, 'l'},      {"loss-scale", required_argument, NULL, 'k'},
-      {"fit-exposures", no_argument, NULL, 'e'},   {"no-multistart", no_argument, NULL, 'M'},
-      {"density", required_argument, NULL, 'd'},   {"max-iterations", required_argument, NULL, 'i'},
-      {"threads", required_argument, NULL, 't'},   {"help", no_argument, NULL, 'h'},
-      {0}};
+  static const struct option options[] = {{"output", required_argument, NULL, 'o'},
+                                          {"model", required_argument, NULL, 'm'},
+                                          {"hold", required_argument, NULL, 'H'},
+                                          {"free", required_argument, NULL, 'F'},
+                                          {"loss", required_argument, NULL, 'l'},
+                                          {"loss-scale", required_argument, NULL, 'k'},
+                                          {"fit-exposures", no_argument, NULL, 'e'},
+                                          {"no-multistart", no_argument, NULL, 'M'},
+                                          {"density", required_argument, NULL, 'd'},
+                                          {"max-iterations", required_argument, NULL, 'i'},
+                                          {"threads", required_argument, NULL, 't'},
+                                          {"help", no_argument, NULL, 'h'},
+                                          {"footprint", required_argument, NULL, 'f'},
+                                          {"footprint-tolerance", required_argument, NULL, 'T'},
+                                          {0}};
   const char *out_dir = NULL, *model_text = "auto";
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
   int hold_count = 0, free_count = 0;
-  fit_settings set = {CF_LOSS_HUBER, 3.0, NAN, 0, 1, 100, 2};
+  fit_settings set = {CF_LOSS_HUBER, 3.0, NAN, 0, 1, 100, 2, 0, 2e-3};
   long max_iterations = 100, threads = 2;
   cf_error err = {0};
   cf_status s = CF_OK;
@@ -182,39 +208,82 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
   opterr = 0;
   for (int c; s == CF_OK && (c = getopt_long(argc, argv, "o:", options, NULL)) != -1;) {
     switch (c) {
-      case 'o': out_dir = optarg; break;
-      case 'm': model_text = optarg; break;
+      case 'o':
+        out_dir = optarg;
+        break;
+      case 'm':
+        model_text = optarg;
+        break;
       case 'H':
       case 'F':
         if ((c == 'H' ? hold_count : free_count) == MAX_ASSIGNMENTS) {
           cli_report("fit", "too many --hold or --free options");
           return CLI_EXIT_USAGE;
         }
-        if (c == 'H') holds[hold_count++] = optarg;
-        else frees[free_count++] = optarg;
+        if (c == 'H')
+          holds[hold_count++] = optarg;
+        else
+          frees[free_count++] = optarg;
         break;
       case 'l':
-        if (strcmp(optarg, "huber") == 0) set.loss = CF_LOSS_HUBER;
-        else if (strcmp(optarg, "cauchy") == 0) set.loss = CF_LOSS_CAUCHY;
-        else if (strcmp(optarg, "none") == 0) set.loss = CF_LOSS_NONE;
-        else s = cf_error_set(&err, CF_EINVAL, "--loss: '%s' is not huber, cauchy or none", optarg);
+        if (strcmp(optarg, "huber") == 0)
+          set.loss = CF_LOSS_HUBER;
+        else if (strcmp(optarg, "cauchy") == 0)
+          set.loss = CF_LOSS_CAUCHY;
+        else if (strcmp(optarg, "none") == 0)
+          set.loss = CF_LOSS_NONE;
+        else
+          s = cf_error_set(&err, CF_EINVAL, "--loss: '%s' is not huber, cauchy or none", optarg);
         break;
       case 'k':
         s = cli_parse_number(optarg, "--loss-scale", &set.loss_scale, &err);
         if (s == CF_OK && !(set.loss_scale > 0.0))
           s = cf_error_set(&err, CF_ERANGE, "--loss-scale must be greater than 0");
         break;
-      case 'e': set.fit_exposures = 1; break;
-      case 'M': set.multistart = 0; break;
+      case 'e':
+        set.fit_exposures = 1;
+        break;
+      case 'M':
+        set.multistart = 0;
+        break;
       case 'd':
         s = cli_parse_number(optarg, "--density", &set.density, &err);
         if (s == CF_OK && !(set.density > 0.0))
           s = cf_error_set(&err, CF_ERANGE, "--density must be greater than 0");
         break;
-      case 'i': s = cli_parse_count(optarg, "--max-iterations", 1, 100000, &max_iterations, &err); break;
-      case 't': s = cli_parse_count(optarg, "--threads", 1, 256, &threads, &err); break;
-      case 'h': fit_usage(stdout); return CLI_EXIT_OK;
-      default: return cli_bad_option("fit", argv);
+      case 'f':
+        if (strcmp(optarg, "auto") == 0)
+          set.footprint = 0;
+        else if (strcmp(optarg, "centre") == 0 || strcmp(optarg, "center") == 0)
+          set.footprint = 1;
+        else {
+          long samples = 0;
+          s = cli_parse_count(optarg, "--footprint", 1, CF_FIT_FOOTPRINT_MAX_SAMPLES, &samples,
+                              &err);
+          if (s != CF_OK)
+            s = cf_error_set(&err, CF_EINVAL,
+                             "--footprint: '%s' is not auto, centre or a number of samples per "
+                             "side from 1 to %d",
+                             optarg, CF_FIT_FOOTPRINT_MAX_SAMPLES);
+          set.footprint = (int)samples;
+        }
+        break;
+      case 'T':
+        s = cli_parse_number(optarg, "--footprint-tolerance", &set.footprint_tolerance, &err);
+        if (s == CF_OK && !(set.footprint_tolerance > 0.0 && set.footprint_tolerance < 1.0))
+          s = cf_error_set(&err, CF_ERANGE, "--footprint-tolerance must be in (0, 1)");
+        break;
+      case 'i':
+        s = cli_parse_count(optarg, "--max-iterations", 1, 100000, &max_iterations, &err);
+        break;
+      case 't':
+        s = cli_parse_count(optarg, "--threads", 1, 256, &threads, &err);
+        break;
+      case 'h':
+        fit_usage(stdout);
+        return CLI_EXIT_OK;
+      default:
+        return cli_bad_option("fit", argv);
     }
   }
   set.max_iterations = (int)max_iterations;
@@ -229,7 +298,8 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
   if (s == CF_OK && automatic)
     s = ladder_options(&set, holds, hold_count, frees, free_count, ladder, &err);
   else if (s == CF_OK)
-    s = model_options(model, &set, holds, hold_count, frees, free_count, NULL, &ladder[model], &err);
+    s = model_options(model, &set, holds, hold_count, frees, free_count, NULL, &ladder[model],
+                      &err);
   if (s != CF_OK) {
     cli_report("fit", err.message);
     return CLI_EXIT_USAGE;
@@ -265,9 +335,10 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
   if (s == CF_OK) s = cf_make_dirs(out_dir, &err);
   if (s == CF_OK) s = cf_path_join(out_dir, "fit.json", path, sizeof path, &err);
   if (s == CF_OK) {
-    cf_fit_report report = {capture,        argv[optind],  &result,      automatic ? &choice : NULL,
-                            CLAYFIT_VERSION, o->loss,      o->loss_scale, o->density,
-                            load_seconds,   fit_seconds};
+    cf_fit_report report = {
+        capture,         argv[optind], &result,       automatic ? &choice : NULL,
+        CLAYFIT_VERSION, o->loss,      o->loss_scale, o->density,
+        load_seconds,    fit_seconds,  o->footprint,  o->footprint_tolerance};
     s = cf_fit_write_json(path, &report, &err);
   }
   if (s == CF_OK) {

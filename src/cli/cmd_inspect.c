@@ -32,6 +32,14 @@ static totals count_flags(const cf_observations *o) {
   return t;
 }
 
+/* "absolute", "relative", or "from_reference" (relative lights scaled by
+ * a reference target of known albedo). */
+static const char *radiometry_name(const cf_capture_summary *sum) {
+  return sum->radiometry_from_reference ? "from_reference"
+         : sum->radiometry_relative     ? "relative"
+                                        : "absolute";
+}
+
 static json_t *summary_json(const cf_capture *capture, const cf_capture_summary *sum,
                             json_t *overlays) {
   const cf_observations *o = cf_capture_observations(capture);
@@ -49,18 +57,23 @@ static json_t *summary_json(const cf_capture *capture, const cf_capture_summary 
   json_t *warnings = json_array();
   for (size_t i = 0; i < sum->warnings; ++i)
     json_array_append_new(warnings, json_string(cf_capture_warning(capture, i)));
-  json_t *doc =
-      json_pack("{s:s, s:s, s:s, s:{s:o, s:f, s:f, s:f}, s:s, s:s, s:I, s:i, s:I, s:I, s:o, s:o}",
-                "name", sum->name, "camera", sum->camera, "geometry", sum->geometry, "sphere",
-                "center", json_doubles(sum->sphere_center, 3), "radius", sum->sphere_radius,
-                "rms_px", sum->sphere_rms_px, "silhouette_kept", sum->silhouette_kept, "radiometry",
-                sum->radiometry_relative ? "relative" : "absolute", "tone_curve",
-                sum->tone_curve_unknown ? "unknown" : "known", "observations", (json_int_t)o->count,
-                "lights_per_observation", o->lights, "clipped", (json_int_t)t.clipped, "unlit",
-                (json_int_t)t.unlit, "images", images, "warnings", warnings);
+  json_t *doc = json_pack(
+      "{s:s, s:s, s:s, s:{s:o, s:f, s:f, s:f}, s:s, s:s, s:I, s:i, s:I, s:I, s:o, s:o}", "name",
+      sum->name, "camera", sum->camera, "geometry", sum->geometry, "sphere", "center",
+      json_doubles(sum->sphere_center, 3), "radius", sum->sphere_radius, "rms_px",
+      sum->sphere_rms_px, "silhouette_kept", sum->silhouette_kept, "radiometry",
+      radiometry_name(sum), "tone_curve", sum->tone_curve_unknown ? "unknown" : "known",
+      "observations", (json_int_t)o->count, "lights_per_observation", o->lights, "clipped",
+      (json_int_t)t.clipped, "unlit", (json_int_t)t.unlit, "images", images, "warnings", warnings);
   if (sum->has_noise)
     json_object_set_new(doc, "noise",
                         json_pack("{s:f, s:f}", "read", sum->noise_read, "shot", sum->noise_shot));
+  if (sum->radiometry_from_reference)
+    json_object_set_new(doc, "reference",
+                        json_pack("{s:f, s:f, s:o, s:I}", "scale", sum->reference_scale, "spread",
+                                  sum->reference_spread, "channel_scales",
+                                  json_doubles(sum->reference_channel_scales, 3), "pixels",
+                                  (json_int_t)sum->reference_pixels));
   if (overlays) json_object_set_new(doc, "overlays", overlays);
   return doc;
 }
@@ -79,8 +92,15 @@ static void print_summary(const cf_capture *capture, const cf_capture_summary *s
   if (sum->sphere_rms_px > 0.0)
     printf(" (silhouettes: RMS %.3g px over the %.3g %% of their points that fit)",
            sum->sphere_rms_px, 100.0 * sum->silhouette_kept);
-  printf("\nradiometry: %s; tone curve: %s", sum->radiometry_relative ? "relative" : "absolute",
-         sum->tone_curve_unknown ? "unknown" : "known");
+  printf("\nradiometry: %s", radiometry_name(sum));
+  if (sum->radiometry_from_reference)
+    printf(
+        " (lights scaled by %.6g from %zu pixels of the reference, spread %.3g %%; channels "
+        "%.6g %.6g %.6g)",
+        sum->reference_scale, sum->reference_pixels, 100.0 * sum->reference_spread,
+        sum->reference_channel_scales[0], sum->reference_channel_scales[1],
+        sum->reference_channel_scales[2]);
+  printf("; tone curve: %s", sum->tone_curve_unknown ? "unknown" : "known");
   if (sum->has_noise) printf("; noise: read %g, shot %g", sum->noise_read, sum->noise_shot);
   printf("\nobservations: %zu (%.3g %% with a clipped channel, %.3g %% unlit)\n", o->count,
          o->count ? 100.0 * (double)t.clipped / (double)o->count : 0.0,

@@ -12,7 +12,8 @@ static void synth_usage(FILE *out) {
           "usage: clayfit synth -o DIR [--model M] [--param name=value ...] [--images N]\n"
           "                     [--size WxH] [--format png8|png16|exr] [--supersample S]\n"
           "                     [--read-noise SIGMA] [--shot-noise K] [--no-noise]\n"
-          "                     [--flash-intensity I] [--silhouettes] [--masks] [--seed N]\n\n"
+          "                     [--flash-intensity I] [--silhouettes] [--masks] [--seed N]\n"
+          "                     [--reference ALBEDO]\n\n"
           "Renders a clay sphere (radius 1, centre at the origin, z up) on a textured\n"
           "ground inside a textured backdrop, seen by an orbit of N cameras (two rings,\n"
           "20 and 35 degrees up, distance 5), each lit by its flash, with MODEL.md's image\n"
@@ -29,7 +30,11 @@ static void synth_usage(FILE *out) {
           "                     facing the flash at distance 5 has radiance 0.5)\n"
           "  --silhouettes      the capture file asks for the sphere from its silhouettes\n"
           "  --masks            also write DIR/masks/ (the sphere's pixels)\n"
-          "  --seed N           textures and noise (default 1)\n");
+          "  --seed N           textures and noise (default 1)\n"
+          "  --reference ALBEDO a grey card of this albedo on the ground in front of the\n"
+          "                     sphere in image 0; the capture file says \"radiometry\":\n"
+          "                     \"relative\", gives the flash intensity times 0.37 (wrong\n"
+          "                     on purpose) and names the card as its reference\n");
 }
 
 enum { MAX_PARAMS = 64 };
@@ -49,6 +54,7 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
                                           {"silhouettes", no_argument, NULL, 'g'},
                                           {"masks", no_argument, NULL, 'M'},
                                           {"seed", required_argument, NULL, 'e'},
+                                          {"reference", required_argument, NULL, 'R'},
                                           {"help", no_argument, NULL, 'h'},
                                           {0}};
   cf_synth_options o;
@@ -126,6 +132,12 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
       case 'e':
         s = cli_parse_count(optarg, "--seed", 0, 2147483647, &count, &err);
         o.seed = (uint64_t)count;
+        break;
+      case 'R':
+        s = cli_parse_number(optarg, "--reference", &o.reference_albedo, &err);
+        if (s == CF_OK && !(o.reference_albedo > 0.0 && o.reference_albedo <= 1.0))
+          s = cf_error_set(&err, CF_EINVAL, "--reference: the albedo %g is outside (0, 1]",
+                           o.reference_albedo);
         break;
       case 'h':
         synth_usage(stdout);

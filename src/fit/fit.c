@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "core/clock.h"
+#include "fit_footprint.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
@@ -30,7 +31,12 @@
 
 /* The best start refines on about REFINE_TARGET observations before all of
  * them (each stage starts closer, where iterations cost more). */
-enum { REFINE_TARGET = 40000, MAX_UNCONSTRAINED_ROUNDS = 4, REWEIGHT_ROUNDS = 4 };
+enum {
+  REFINE_TARGET = 40000,
+  MAX_UNCONSTRAINED_ROUNDS = 4,
+  REWEIGHT_ROUNDS = 4,
+  FOOTPRINT_ROUNDS = 3
+};
 
 void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   memset(o, 0, sizeof *o);
@@ -41,26 +47,38 @@ void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   o->max_iterations = 100;
   o->threads = 2;
   o->density = NAN;
+  o->footprint = 0;
+  o->footprint_tolerance = 2e-3;
 }
 
 const char *cf_fit_stage_name(cf_fit_stage stage) {
   switch (stage) {
-    case CF_FIT_STAGE_START: return "start";
-    case CF_FIT_STAGE_REFINE: return "refine";
-    case CF_FIT_STAGE_SOLVE: return "solve";
-    case CF_FIT_STAGE_STATISTICS: return "statistics";
-    case CF_FIT_STAGE_COUNT: break;
+    case CF_FIT_STAGE_START:
+      return "start";
+    case CF_FIT_STAGE_REFINE:
+      return "refine";
+    case CF_FIT_STAGE_SOLVE:
+      return "solve";
+    case CF_FIT_STAGE_STATISTICS:
+      return "statistics";
+    case CF_FIT_STAGE_COUNT:
+      break;
   }
   return "unknown";
 }
 
 const char *cf_param_status_name(cf_param_status status) {
   switch (status) {
-    case CF_PARAM_FITTED: return "fitted";
-    case CF_PARAM_HELD: return "held";
-    case CF_PARAM_HELD_FOR_SCALE: return "held: sets the absolute scale";
-    case CF_PARAM_UNCONSTRAINED: return "not constrained by this capture";
-    case CF_PARAM_AT_BOUND: return "fitted: at a bound of its range";
+    case CF_PARAM_FITTED:
+      return "fitted";
+    case CF_PARAM_HELD:
+      return "held";
+    case CF_PARAM_HELD_FOR_SCALE:
+      return "held: sets the absolute scale";
+    case CF_PARAM_UNCONSTRAINED:
+      return "not constrained by this capture";
+    case CF_PARAM_AT_BOUND:
+      return "fitted: at a bound of its range";
   }
   return "unknown";
 }
@@ -149,8 +167,8 @@ static cf_status check_options(const cf_fit_options *o, cf_error *err) {
       return cf_error_set(err, CF_ERANGE, "--hold %s=%g is outside its range [%g, %g]", name,
                           o->hold_value[k], info->lower, info->upper);
     if (o->use_start && (!(o->start[k] >= info->lower) || !(o->start[k] <= info->upper)))
-      return cf_error_set(err, CF_ERANGE, "the start's %s = %g is outside its range [%g, %g]",
-                          name, o->start[k], info->lower, info->upper);
+      return cf_error_set(err, CF_ERANGE, "the start's %s = %g is outside its range [%g, %g]", name,
+                          o->start[k], info->lower, info->upper);
   }
   if (o->use_start && !(o->start_scale > 0.0 && isfinite(o->start_scale)))
     return cf_error_set(err, CF_ERANGE, "the start's scale %g is not a positive number",
@@ -181,6 +199,8 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
     ++r->free_unknowns;
     if (unk->kind == FIT_LOG_SCALE) {
       r->scale_sd = exp(p->log_scale) * sqrt(fmax(0.0, var)); /* d s = s d log s */
+    } else if (unk->kind == FIT_RESPONSE) {
+      r->response_sd = sqrt(fmax(0.0, var));
     } else if (unk->kind == FIT_LOG_EXPOSURE) {
       continue;
     } else if (p->at_bound[u]) {
@@ -199,6 +219,8 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
       r->correlation[a * r->free_count + b] =
           va > 0.0 && vb > 0.0 ? covariance[map[a] * n + map[b]] / sqrt(va * vb) : (a == b);
     }
+  r->response = p->response;
+  r->response_fitted = plan->response;
   r->scale = exp(p->log_scale);
   r->scale_fitted = plan->scale;
   r->images = p->images;
@@ -222,6 +244,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
 
   /* 2. the start: the multi-start, or the one given */
   double params[CF_MAX_DIM], log_scale = 0.0, sigma = 1.0, clock = cf_now_seconds(), then;
+  double response = 1.0; /* γ: fitted on every observation only, from 1 or the start's */
   if (o->use_start) {
     memcpy(params, o->start, sizeof params);
     for (int k = 0; k < m->dim; ++k)
@@ -230,6 +253,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     if (sk >= 0 && plan.status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
       params[sk] = FIT_SCALE_F0;
     log_scale = plan.scale ? log(o->start_scale) : 0.0;
+    response = o->start_response > 0.0 ? o->start_response : 1.0;
     s = fit_start_sigma(capture, population, o, params, log_scale, &sigma, err);
   } else {
     s = fit_multistart(capture, population, o, &plan, r, params, &log_scale, &sigma, err);
@@ -251,6 +275,12 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   if (s != CF_OK) return s;
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
+  /* an unknown tone curve: the response exponent is fitted from here on
+   * (the starts and the subsample assume a linear response) */
+  cf_capture_summary about;
+  cf_capture_summarize(capture, &about);
+  plan.response = about.tone_curve_unknown;
+  p.response = plan.response ? response : 1.0;
   cf_lsq_summary summary = {0};
   double *covariance = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *covariance);
   double *jtj = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *jtj);
@@ -267,6 +297,17 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   if (s == CF_OK && has_noise)
     s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, err);
   if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
+
+  /* the pixel footprints where a lobe is narrower than a pixel, at the
+   * parameters found, until the samples settle */
+  for (int round = 0; s == CF_OK && round < FOOTPRINT_ROUNDS; ++round) {
+    int changed = 0;
+    s = fit_footprint_update(&p, capture, o, &changed, err);
+    if (s != CF_OK || !changed) break;
+    fit_progress(o, "integrating pixel footprints", (size_t)round, FOOTPRINT_ROUNDS);
+    s = fit_solve(&p, o, o->max_iterations, &summary, err);
+    if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
+  }
 
   /* 4. robust solves until every free parameter is constrained */
   int rank_deficient = 0;
@@ -303,16 +344,19 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     r->solves = p.solves;
     snprintf(r->termination, sizeof r->termination, "%s", summary.termination);
     r->solve_seconds = p.solver_seconds;
+    fit_footprint_tally(&p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);
     r->ambiguous = fit_ambiguous(r, o->model, has_noise ? 1.0 : sigma * sigma);
     if (r->ambiguous)
-      fit_add_warning(r, "on the multi-start's subsample two starts far apart ended within "
-                         "the noise of each other (see starts); the fit on all observations "
-                         "went on from the best: see its sd and correlations");
+      fit_add_warning(r,
+                      "on the multi-start's subsample two starts far apart ended within "
+                      "the noise of each other (see starts); the fit on all observations "
+                      "went on from the best: see its sd and correlations");
     cf_capture_summary summary_of_capture;
     cf_capture_summarize(capture, &summary_of_capture);
     if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
-      fit_add_warning(r, "the capture's radiometry is relative and %s has no interface F0 to "
-                         "fix the scale: its albedo is in the lights' relative units",
+      fit_add_warning(r,
+                      "the capture's radiometry is relative and %s has no interface F0 to "
+                      "fix the scale: its albedo is in the lights' relative units",
                       m->code);
   }
   r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = cf_now_seconds()) - clock;

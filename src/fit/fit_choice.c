@@ -202,6 +202,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   o.use_start = 1;
   memcpy(o.start, c->fit.params, sizeof o.start);
   o.start_scale = c->fit.scale;
+  o.start_response = c->fit.response;
   s = cf_fit_run(capture, &o, result, err);
   if (s != CF_OK) return s;
   result->starts = c->fit.starts;

@@ -172,6 +172,21 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
       "candidates", candidates);
 }
 
+/* How the pixel footprints were integrated (cf_fit_options.footprint). */
+static json_t *footprint_json(const cf_fit_report *rep) {
+  const cf_fit_result *r = rep->result;
+  const char *mode = rep->footprint == 0 ? "auto" : rep->footprint == 1 ? "centre" : "fixed";
+  return json_pack("{s:s, s:i, s:f, s:I, s:I, s:i, s:s}", "mode", mode, "samples_per_side",
+                   rep->footprint >= 2 ? rep->footprint : 0, "tolerance",
+                   rep->footprint_tolerance, "observations",
+                   (json_int_t)r->footprint_observations, "samples",
+                   (json_int_t)r->footprint_samples, "max_samples_per_side", r->footprint_max,
+                   "meaning",
+                   "observations integrated over their pixel with S x S samples (S >= 2) "
+                   "where a lobe is narrower than the pixel, the samples over them, and the "
+                   "largest S; the others are evaluated at the pixel centre");
+}
+
 cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error *err) {
   const cf_fit_result *r = rep->result;
   const cf_model_info *m = cf_model_info_get(r->model);
@@ -217,7 +232,10 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
       "s:{s:i, s:i, s:s, s:f, s:f}, s:o, s:i, s:o, s:{s:f, s:f, s:f, s:o}}",
       "clayfit_fit", 1, "clayfit_version", rep->version, "created", created, "capture", "path",
       rep->capture_path, "name", summary.name, "images", (json_int_t)r->images, "observations",
-      (json_int_t)obs->count, "radiometry", summary.radiometry_relative ? "relative" : "absolute",
+      (json_int_t)obs->count, "radiometry",
+      summary.radiometry_from_reference ? "from_reference"
+      : summary.radiometry_relative     ? "relative"
+                                        : "absolute",
       "model", "code", m->code, "name", m->name, "params", params_json(r), "derived",
       derived_json(r, rep->density), "scale", "value", r->scale, "sd", r->scale_sd, "fitted",
       r->scale_fitted, "correlation", correlation_json(r), "held", held, "not_constrained",
@@ -230,10 +248,24 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
       r->solve_seconds, "final_cost", r->cost, "starts", starts, "best_start", r->best_start,
       "warnings", warnings, "timing", "load_s", rep->load_seconds, "fit_s", rep->fit_seconds,
       "total_s", rep->load_seconds + rep->fit_seconds, "stages", stages);
+  if (doc && summary.radiometry_from_reference) /* the capture's scale from its reference */
+    json_object_set_new(json_object_get(doc, "capture"), "reference",
+                        json_pack("{s:f, s:f, s:I}", "scale", summary.reference_scale, "spread",
+                                  summary.reference_spread, "pixels",
+                                  (json_int_t)summary.reference_pixels));
   if (doc) json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
   if (doc)
     json_object_set_new(json_object_get(doc, "timing"), "choice_s",
                         json_real(rep->choice ? rep->choice->seconds : 0.0));
+  if (doc) json_object_set_new(doc, "footprint", footprint_json(rep));
+  if (doc)
+    json_object_set_new(
+        doc, "response",
+        json_pack("{s:f, s:f, s:b, s:s}", "value", r->response, "sd", r->response_sd, "fitted",
+                  r->response_fitted, "meaning",
+                  "the response exponent: the decoded photo values are modelled as "
+                  "(scale x exposure x radiance)^value; fitted when the capture says the tone "
+                  "curve is unknown, else 1"));
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build fit.json");
   int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0;
   json_decref(doc);

@@ -16,6 +16,8 @@ typedef struct cf_fit_report {
   double loss_scale;
   double density;       /* NaN: MODEL.md's convention */
   double load_seconds, fit_seconds;
+  int footprint;              /* cf_fit_options.footprint */
+  double footprint_tolerance; /* cf_fit_options.footprint_tolerance */
 } cf_fit_report;
 
 cf_status cf_fit_write_json(const char *path, const cf_fit_report *report, cf_error *err);

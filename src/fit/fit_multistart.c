@@ -28,8 +28,9 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
   }
   for (size_t i = 0; i < n; ++i) {
     double most = 0.0;
-    for (int j = 0; j < p->lights; ++j) {
-      const cf_geometry *g = &p->geometry[i * (size_t)p->lights + (size_t)j];
+    size_t first, slots = fit_problem_slot_range(p, i, &first);
+    for (size_t pair = first; pair < first + slots; ++pair) {
+      const cf_geometry *g = &p->geometry[pair];
       if (cf_geometry_is_lit(g)) most = fmax(most, g->cos2_h);
     }
     specularity[i] = sorted[i] = most;
@@ -38,11 +39,11 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
   double num[3] = {0}, den[3] = {0};
   for (size_t i = 0; i < n; ++i) {
     if (specularity[i] > threshold) continue;
-    size_t k = p->index ? p->index[i] : i;
+    size_t k = p->index ? p->index[i] : i, first, slots = fit_problem_slot_range(p, i, &first);
     for (int c = 0; c < 3; ++c) {
       double q = 0.0; /* the Lambertian prediction with ρ = 1 */
-      for (int j = 0; j < p->lights; ++j)
-        q += p->weight[3 * (i * (size_t)p->lights + (size_t)j) + (size_t)c] / 3.14159265358979;
+      for (size_t pair = first; pair < first + slots; ++pair)
+        q += p->weight[3 * pair + (size_t)c] / 3.14159265358979;
       num[c] += p->obs->rgb[3 * k + (size_t)c] * q;
       den[c] += q * q;
     }
@@ -61,7 +62,8 @@ static void base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_
   for (int k = 0; k < m->dim; ++k)
     if (plan->status[k] != CF_PARAM_FITTED && o->hold[k]) params[k] = o->hold_value[k];
   int sk = fit_scale_slot(p->model);
-  if (sk >= 0 && plan->status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk]) params[sk] = FIT_SCALE_F0;
+  if (sk >= 0 && plan->status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
+    params[sk] = FIT_SCALE_F0;
   double rho[3];
   lambert_albedo(p, rho);
   double largest = fmax(rho[0], fmax(rho[1], rho[2]));
@@ -111,18 +113,20 @@ static cf_status warm_dielectric(const cf_capture *capture, const cf_fit_options
   fit_plan plan;
   fit_plan_for(capture, &o2, &plan);
   fit_problem sub;
-  cf_status s = fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index,
-                                 sample->count, err);
+  cf_status s =
+      fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index, sample->count, err);
   if (s != CF_OK) return s;
   s = fit_problem_set_sample_weights(&sub, sample->weight, err);
-  double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM], log_scales[CF_FIT_MAX_STARTS];
+  double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM],
+      log_scales[CF_FIT_MAX_STARTS];
   base_start(&sub, &plan, &o2, base, &log_scale);
   int held[CF_MAX_DIM];
   for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan.status[k] != CF_PARAM_FITTED;
   int count = fit_starts(CF_MODEL_DIELECTRIC, base, held, NULL, starts, CF_FIT_MAX_STARTS);
   cf_fit_result *r = s == CF_OK ? calloc(1, sizeof *r) : NULL;
-  if (s == CF_OK) s = r ? run_starts(&sub, &o2, &plan, starts, count, log_scale, r, log_scales, err)
-        : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK)
+    s = r ? run_starts(&sub, &o2, &plan, starts, count, log_scale, r, log_scales, err)
+          : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) memcpy(m2, r->start[r->best_start].end, sizeof r->start[0].end);
   free(r);
   fit_problem_release(&sub);
@@ -137,8 +141,8 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
                          cf_error *err) {
   fit_sample sample;
   fit_problem sub;
-  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population,
-                                        SUBSAMPLE_TARGET, err);
+  cf_status s =
+      fit_problem_init_sample(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
   if (s != CF_OK) return s;
   double base[CF_MAX_DIM], log_scale;
   base_start(&sub, plan, o, base, &log_scale);
@@ -156,8 +160,7 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
     memcpy(starts[0], base, sizeof base);
     count = 1;
   }
-  if (s == CF_OK)
-    s = run_starts(&sub, o, plan, starts, count, log_scale, r, log_scales, err);
+  if (s == CF_OK) s = run_starts(&sub, o, plan, starts, count, log_scale, r, log_scales, err);
   if (s == CF_OK) {
     memcpy(best_params, r->start[r->best_start].end, sizeof r->start[0].end);
     *best_log_scale = log_scales[r->best_start];
@@ -179,8 +182,8 @@ cf_status fit_start_sigma(const cf_capture *capture, const fit_population *popul
                           double *sigma, cf_error *err) {
   fit_sample sample;
   fit_problem sub;
-  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population,
-                                        SUBSAMPLE_TARGET, err);
+  cf_status s =
+      fit_problem_init_sample(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
   if (s != CF_OK) return s;
   memcpy(sub.params, params, sizeof sub.params);
   sub.log_scale = log_scale;

@@ -11,10 +11,14 @@
  * are known only up to a factor (MODEL.md, "relative radiometry"), or −1. */
 int fit_scale_slot(cf_model_id model) {
   switch (model) {
-    case CF_MODEL_DIELECTRIC: return CF_DIELECTRIC_F0;
-    case CF_MODEL_CLEARCOAT: return CF_CLEARCOAT_F0;
-    case CF_MODEL_CLAY: return CF_CLAY_FILM_F0;
-    default: return -1;
+    case CF_MODEL_DIELECTRIC:
+      return CF_DIELECTRIC_F0;
+    case CF_MODEL_CLEARCOAT:
+      return CF_CLEARCOAT_F0;
+    case CF_MODEL_CLAY:
+      return CF_CLAY_FILM_F0;
+    default:
+      return -1;
   }
 }
 
@@ -41,18 +45,24 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
     if (plan->status[k] == CF_PARAM_FITTED) fit_problem_free_slot(p, k);
   if (plan->scale) fit_problem_free_scale(p);
   if (plan->exposures) fit_problem_free_exposures(p);
+  if (plan->response) fit_problem_free_response(p);
   return fit_problem_finish(p, err);
 }
 
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
-                       cf_lsq_summary *summary, cf_error *err) {
+                    cf_lsq_summary *summary, cf_error *err) {
   double x[FIT_MAX_FREE];
   fit_problem_get_x(p, x);
-  cf_lsq_problem problem = {p->num_unknowns,          x,
-                            p->lower,                  p->upper,
-                            p->num_blocks,             p->block_residuals,
-                            fit_problem_evaluate,      fit_problem_block_columns,
-                            p,                         p->at_bound};
+  cf_lsq_problem problem = {p->num_unknowns,
+                            x,
+                            p->lower,
+                            p->upper,
+                            p->num_blocks,
+                            p->block_residuals,
+                            fit_problem_evaluate,
+                            fit_problem_block_columns,
+                            p,
+                            p->at_bound};
   cf_lsq_options options;
   cf_lsq_default_options(&options);
   options.max_iterations = max_iterations;
@@ -71,9 +81,8 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
  * solve again, to the fixed point (the largest change in a model slot
  * below 1e-7 of its range's width, or `rounds` rounds); without one, one
  * solve. */
-cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture,
-                                  const cf_fit_options *o, int rounds, cf_lsq_summary *summary,
-                                  cf_error *err) {
+cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
+                               int rounds, cf_lsq_summary *summary, cf_error *err) {
   if (!fit_capture_has_noise(capture)) return fit_solve(p, o, o->max_iterations, summary, err);
   cf_status s = CF_OK;
   for (int round = 0; s == CF_OK && round < rounds; ++round) {

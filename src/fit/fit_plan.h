@@ -15,6 +15,7 @@
 typedef struct fit_plan {
   cf_param_status status[CF_MAX_DIM];
   int scale, exposures;
+  int response; /* the response exponent (an unknown tone curve) */
 } fit_plan;
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights

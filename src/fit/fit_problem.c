@@ -13,9 +13,7 @@ static size_t observation(const fit_problem *p, size_t i) {
   return p->index ? p->index[i] : i;
 }
 
-/* How near an observation's half vector comes to its normal, for any lit
- * light: max_j n·normalize(l_j + v). */
-static double specularity(const cf_observations *obs, size_t k) {
+double fit_observation_specularity(const cf_observations *obs, size_t k) {
   const double *n = obs->normal + 3 * k, *v = obs->view + 3 * k;
   double best = -1.0;
   for (int j = 0; j < obs->lights; ++j) {
@@ -59,7 +57,7 @@ cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from
     return CF_OK;
   }
   for (size_t i = 0; i < n; ++i)
-    score[i] = sorted[i] = specularity(obs, from->index ? from->index[i] : i);
+    score[i] = sorted[i] = fit_observation_specularity(obs, from->index ? from->index[i] : i);
   double threshold = fit_kth_smallest(sorted, n, n - n / 16);
   size_t specular = 0;
   for (size_t i = 0; i < n; ++i) specular += score[i] >= threshold;
@@ -109,9 +107,11 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->last_image = (uint32_t)(p->images - 1);
   p->loss = CF_LOSS_NONE;
   p->loss_scale = 3.0;
+  p->response = 1.0;
   p->block_size = BLOCK_SIZE;
   cf_model_default_params(model, p->params);
   size_t pairs = p->count * (size_t)p->lights;
+  p->slots = pairs;
   p->geometry = malloc(pairs * sizeof *p->geometry);
   p->weight = malloc(3 * pairs * sizeof *p->weight);
   p->inv_sigma = malloc(3 * p->count * sizeof *p->inv_sigma);
@@ -123,17 +123,22 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   /* the geometry of every (observation, light) pair, and E c_i */
   const cf_observations *o = p->obs;
   for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i);
-    for (int j = 0; j < p->lights; ++j) {
-      size_t pair = i * (size_t)p->lights + (size_t)j, slot = k * (size_t)p->lights + (size_t)j;
-      const double *l = o->light_dir + 3 * slot, *e = o->irradiance + 3 * slot;
-      p->geometry[pair] = cf_geometry_from_directions(o->normal + 3 * k, l, o->view + 3 * k);
-      double cos_i = cf_geometry_is_lit(&p->geometry[pair]) ? p->geometry[pair].cos_i : 0.0;
-      for (int c = 0; c < 3; ++c) p->weight[3 * pair + (size_t)c] = e[c] * cos_i;
-    }
+    size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
+    fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * slot,
+                 o->irradiance + 3 * slot, 1.0, p->geometry + pair, p->weight + 3 * pair);
   }
   fit_problem_set_sigma(p, capture, 1.0);
   return CF_OK;
+}
+
+void fit_pairs_at(int lights, const double n[3], const double v[3], const double *light_dir,
+                  const double *irradiance, double scale, cf_geometry *geometry, double *weight) {
+  for (int j = 0; j < lights; ++j) {
+    const double *l = light_dir + 3 * j, *e = irradiance + 3 * j;
+    geometry[j] = cf_geometry_from_directions(n, l, v);
+    double cos_i = cf_geometry_is_lit(&geometry[j]) ? geometry[j].cos_i : 0.0;
+    for (int c = 0; c < 3; ++c) weight[3 * j + c] = scale * e[c] * cos_i;
+  }
 }
 
 void fit_problem_release(fit_problem *p) {
@@ -143,6 +148,8 @@ void fit_problem_release(fit_problem *p) {
   free(p->log_exposures);
   free(p->block_residuals);
   free(p->sample_root);
+  free(p->slot_begin);
+  free(p->samples);
   memset(p, 0, sizeof *p);
 }
 
@@ -202,6 +209,7 @@ cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_err
 
 void fit_problem_clear_unknowns(fit_problem *p) {
   p->num_unknowns = 0;
+  p->response_on = p->response != 1.0;
   memset(p->at_bound, 0, sizeof p->at_bound);
 }
 
@@ -218,7 +226,8 @@ void fit_problem_free_slot(fit_problem *p, int slot) {
     if (slot >= m->offsets[j]) {
       const cf_param_info *info = cf_param_info_get(m->params[j]);
       if (info->id == CF_PARAM_ALBEDO) {
-        add_unknown(p, FIT_LOG_SLOT, slot, log(fmax(info->lower, FIT_ALBEDO_FLOOR)), log(info->upper));
+        add_unknown(p, FIT_LOG_SLOT, slot, log(fmax(info->lower, FIT_ALBEDO_FLOOR)),
+                    log(info->upper));
         return;
       }
       if (info->id == CF_PARAM_DIFFUSE_ROUGHNESS) {
@@ -230,7 +239,14 @@ void fit_problem_free_slot(fit_problem *p, int slot) {
     }
 }
 
-void fit_problem_free_scale(fit_problem *p) { add_unknown(p, FIT_LOG_SCALE, 0, -HUGE_VAL, HUGE_VAL); }
+void fit_problem_free_scale(fit_problem *p) {
+  add_unknown(p, FIT_LOG_SCALE, 0, -HUGE_VAL, HUGE_VAL);
+}
+
+void fit_problem_free_response(fit_problem *p) {
+  add_unknown(p, FIT_RESPONSE, 0, FIT_RESPONSE_LOWER, FIT_RESPONSE_UPPER);
+  p->response_on = 1;
+}
 
 void fit_problem_free_exposures(fit_problem *p) {
   for (size_t k = 0; k + 1 < p->images; ++k)
@@ -252,29 +268,38 @@ cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
 void fit_problem_get_x(const fit_problem *p, double *x) {
   for (int i = 0; i < p->num_unknowns; ++i) {
     const fit_unknown *u = &p->unknowns[i];
-    x[i] = u->kind == FIT_MODEL_SLOT ? p->params[u->slot]
-           : u->kind == FIT_LOG_SLOT  ? log(p->params[u->slot])
+    x[i] = u->kind == FIT_MODEL_SLOT    ? p->params[u->slot]
+           : u->kind == FIT_LOG_SLOT    ? log(p->params[u->slot])
            : u->kind == FIT_SQUARE_SLOT ? p->params[u->slot] * p->params[u->slot]
-           : u->kind == FIT_LOG_SCALE ? p->log_scale
-                                      : p->log_exposures[u->slot];
+           : u->kind == FIT_LOG_SCALE   ? p->log_scale
+           : u->kind == FIT_RESPONSE    ? p->response
+                                        : p->log_exposures[u->slot];
   }
 }
 
 /* The values x stands for: params, log s, log e_k (the last image's from
  * the others). */
 static void values_at(const fit_problem *p, const double *x, double *params, double *log_scale,
-                      double *log_exposures) {
+                      double *response, double *log_exposures) {
   memcpy(params, p->params, sizeof p->params);
   *log_scale = p->log_scale;
+  *response = p->response;
   if (log_exposures) memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
   int exposures_free = 0;
   for (int i = 0; i < p->num_unknowns; ++i) {
     const fit_unknown *u = &p->unknowns[i];
-    if (u->kind == FIT_MODEL_SLOT) params[u->slot] = x[i];
-    else if (u->kind == FIT_LOG_SLOT) params[u->slot] = exp(x[i]);
-    else if (u->kind == FIT_SQUARE_SLOT) params[u->slot] = sqrt(fmax(x[i], 0.0));
-    else if (u->kind == FIT_LOG_SCALE) *log_scale = x[i];
-    else if (log_exposures) log_exposures[u->slot] = x[i], exposures_free = 1;
+    if (u->kind == FIT_MODEL_SLOT)
+      params[u->slot] = x[i];
+    else if (u->kind == FIT_LOG_SLOT)
+      params[u->slot] = exp(x[i]);
+    else if (u->kind == FIT_SQUARE_SLOT)
+      params[u->slot] = sqrt(fmax(x[i], 0.0));
+    else if (u->kind == FIT_LOG_SCALE)
+      *log_scale = x[i];
+    else if (u->kind == FIT_RESPONSE)
+      *response = x[i];
+    else if (log_exposures)
+      log_exposures[u->slot] = x[i], exposures_free = 1;
   }
   if (exposures_free) {
     double sum = 0.0;
@@ -284,10 +309,11 @@ static void values_at(const fit_problem *p, const double *x, double *params, dou
 }
 
 void fit_problem_set_x(fit_problem *p, const double *x) {
-  double params[CF_MAX_DIM], log_scale;
-  values_at(p, x, params, &log_scale, p->log_exposures);
+  double params[CF_MAX_DIM], log_scale, response;
+  values_at(p, x, params, &log_scale, &response, p->log_exposures);
   memcpy(p->params, params, sizeof params);
   p->log_scale = log_scale;
+  p->response = response;
 }
 
 /* ---- the loss, per scalar residual ----
@@ -317,14 +343,18 @@ static double robust(const fit_problem *p, double s, double *rho1) {
 
 /* ---- residuals ---- */
 
-int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost,
-                         double *residuals, double *jacobian) {
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *residuals,
+                         double *jacobian) {
   const fit_problem *p = user;
   size_t begin = block * p->block_size;
   size_t n = p->count - begin < p->block_size ? p->count - begin : p->block_size;
-  size_t pairs = n * (size_t)p->lights;
-  const int dim = p->dim, unknowns = p->num_unknowns, lights = p->lights;
-  double params[CF_MAX_DIM], log_scale;
+  size_t first_pair, last_pair;
+  fit_problem_slot_range(p, begin, &first_pair);
+  last_pair = first_pair;
+  if (n > 0) last_pair = fit_problem_slot_range(p, begin + n - 1, &last_pair) + last_pair;
+  size_t pairs = last_pair - first_pair;
+  const int dim = p->dim, unknowns = p->num_unknowns;
+  double params[CF_MAX_DIM], log_scale, response;
   double *log_e = malloc(p->images * sizeof *log_e);
   double *f = malloc(3 * pairs * sizeof *f);
   double *grad = jacobian ? malloc(3 * (size_t)dim * pairs * sizeof *grad) : NULL;
@@ -332,11 +362,12 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
   /* the model unknowns' slots and d param / d x: 1, ρ for log ρ, 1/(2σ)
    * for σ²; the scale's and the exposures' columns */
   int model_u[CF_MAX_DIM], model_slot[CF_MAX_DIM], model_count = 0, scale_u = -1, exposures = 0;
+  int response_u = -1;
   double model_factor[CF_MAX_DIM];
   int *exposure_u = p->images > 0 ? malloc(p->images * sizeof *exposure_u) : NULL;
   ok = ok && exposure_u;
   if (ok) {
-    values_at(p, x, params, &log_scale, log_e);
+    values_at(p, x, params, &log_scale, &response, log_e);
     /* σ² unknowns: evaluate at σ >= 1e-6, so that ∂f/∂σ² = (∂f/∂σ)/(2σ)
      * has no 0/0 (f depends on σ through σ² only, and differs from its
      * value at σ = 0 by about 1e-13 relative there) */
@@ -344,8 +375,12 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
     for (int u = 0; u < unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];
       if (unk->kind == FIT_SQUARE_SLOT) params[unk->slot] = fmax(params[unk->slot], 1e-6);
-      if (unk->kind == FIT_LOG_SCALE) scale_u = u;
-      else if (unk->kind == FIT_LOG_EXPOSURE) exposure_u[unk->slot] = u, exposures = 1;
+      if (unk->kind == FIT_LOG_SCALE)
+        scale_u = u;
+      else if (unk->kind == FIT_RESPONSE)
+        response_u = u;
+      else if (unk->kind == FIT_LOG_EXPOSURE)
+        exposure_u[unk->slot] = u, exposures = 1;
     }
     for (int u = 0; u < unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];
@@ -357,8 +392,7 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
                                     : unk->kind == FIT_SQUARE_SLOT ? 0.5 / params[unk->slot]
                                                                    : 1.0;
     }
-    ok = cf_eval_batch(p->model, params, pairs, p->geometry + begin * (size_t)lights, f, grad) ==
-         CF_OK;
+    ok = cf_eval_batch(p->model, params, pairs, p->geometry + first_pair, f, grad) == CF_OK;
   }
   double total = 0.0; /* Σ w ρ */
   for (size_t i = 0; ok && i < n; ++i) {
@@ -366,23 +400,26 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
     const double *y = p->obs->rgb + 3 * k;
     uint32_t image = p->obs->image[k];
     double gain = exp(log_scale + log_e[image]);
-    const double *w = p->weight + 3 * (row * (size_t)lights);
+    size_t first;
+    size_t slots = fit_problem_slot_range(p, row, &first);
+    const double *w = p->weight + 3 * first;
+    first -= first_pair; /* into f and grad */
     for (int c = 0; c < 3; ++c) {
       /* the prediction and its gradient in the model's slots: with one
-       * light, the evaluator's gradient scaled (no accumulator to zero: a
+       * slot, the evaluator's gradient scaled (no accumulator to zero: a
        * zeroed array here cost a fifth of this function in stores) */
       double model_value = 0.0, sum[CF_MAX_DIM], weight_one = 0.0;
       const double *dmodel = sum;
-      if (lights == 1) {
+      if (slots == 1) {
         weight_one = w[c];
-        model_value = weight_one * f[3 * i + (size_t)c];
-        if (grad) dmodel = grad + (3 * i + (size_t)c) * (size_t)dim;
+        model_value = weight_one * f[3 * first + (size_t)c];
+        if (grad) dmodel = grad + (3 * first + (size_t)c) * (size_t)dim;
       } else {
         weight_one = 1.0;
         for (int s = 0; s < dim; ++s) sum[s] = 0.0;
-        for (int j = 0; j < lights; ++j) {
-          size_t pair = i * (size_t)lights + (size_t)j;
-          double wj = w[3 * (size_t)j + (size_t)c];
+        for (size_t j = 0; j < slots; ++j) {
+          size_t pair = first + j;
+          double wj = w[3 * j + (size_t)c];
           if (wj == 0.0) continue;
           model_value += wj * f[3 * pair + (size_t)c];
           if (!grad) continue;
@@ -390,7 +427,15 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
           for (int s = 0; s < dim; ++s) sum[s] += wj * g[s];
         }
       }
-      double prediction = gain * model_value;
+      /* with a response exponent, (gain · model)^γ and its chain factor
+       * γ (gain · model)^(γ − 1) (0 where the linear value is not positive:
+       * no light, no prediction) */
+      double linear = gain * model_value, prediction = linear, chain = 1.0, log_linear = 0.0;
+      if (p->response_on) {
+        prediction = linear > 0.0 ? pow(linear, response) : 0.0;
+        chain = linear > 0.0 ? response * prediction / linear : 0.0;
+        log_linear = linear > 0.0 ? log(linear) : 0.0;
+      }
       double inv_sigma = p->inv_sigma[3 * row + (size_t)c];
       double r = (prediction - y[c]) * inv_sigma;
       /* a clipped channel only counts while the model predicts less */
@@ -407,17 +452,20 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       /* Ceres checks the arrays for non-finite values: 0, not 0·∞ */
       double scale = censored ? 0.0 : root * sqrt(rho1) * inv_sigma;
       if (exposures) memset(row_j, 0, (size_t)unknowns * sizeof *row_j);
-      double model_scale = scale * gain * weight_one;
+      double model_scale = scale * chain * gain * weight_one;
       for (int m = 0; m < model_count; ++m)
         row_j[model_u[m]] = model_scale * dmodel[model_slot[m]] * model_factor[m];
-      if (scale_u >= 0) row_j[scale_u] = scale * prediction;
+      /* ∂ prediction / ∂ log gain = γ · prediction = chain · linear */
+      double d_log_gain = scale * chain * linear;
+      if (scale_u >= 0) row_j[scale_u] = d_log_gain;
+      if (response_u >= 0) row_j[response_u] = scale * prediction * log_linear;
       if (!exposures) continue;
       /* log e_k: this image's, or for the last image −Σ of the others */
       if (image == p->last_image) {
         for (size_t e = 0; e + 1 < p->images; ++e)
-          if (exposure_u[e] >= 0) row_j[exposure_u[e]] = -scale * prediction;
+          if (exposure_u[e] >= 0) row_j[exposure_u[e]] = -d_log_gain;
       } else if (exposure_u[image] >= 0) {
-        row_j[exposure_u[image]] = scale * prediction;
+        row_j[exposure_u[image]] = d_log_gain;
       }
     }
   }
@@ -448,20 +496,20 @@ int fit_problem_block_columns(void *user, size_t block, int *columns) {
 
 cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,
                               cf_error *err) {
-  size_t pairs = p->count * (size_t)p->lights;
-  double *f = malloc(3 * pairs * sizeof *f);
+  double *f = malloc(3 * (p->slots ? p->slots : 1) * sizeof *f);
   if (!f) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  cf_eval_batch(p->model, p->params, pairs, p->geometry, f, NULL);
+  cf_eval_batch(p->model, p->params, p->slots, p->geometry, f, NULL);
   for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i);
+    size_t k = observation(p, i), first;
+    size_t slots = fit_problem_slot_range(p, i, &first);
     double gain = exp(p->log_scale + p->log_exposures[p->obs->image[k]]);
     for (int c = 0; c < 3; ++c) {
       double value = 0.0;
-      for (int j = 0; j < p->lights; ++j) {
-        size_t pair = i * (size_t)p->lights + (size_t)j;
+      for (size_t pair = first; pair < first + slots; ++pair)
         value += p->weight[3 * pair + (size_t)c] * f[3 * pair + (size_t)c];
-      }
-      prediction[3 * i + (size_t)c] = gain * value;
+      double linear = gain * value;
+      prediction[3 * i + (size_t)c] =
+          p->response_on ? (linear > 0.0 ? pow(linear, p->response) : 0.0) : linear;
       measured[3 * i + (size_t)c] = p->obs->rgb[3 * k + (size_t)c];
     }
   }

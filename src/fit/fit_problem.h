@@ -22,19 +22,27 @@ enum { FIT_MAX_FREE = CF_MAX_DIM + 1 + 1024 }; /* model, scale, exposures */
  * drive log ρ to −∞), and σ, fitted as σ² (bounds squared). */
 #define FIT_ALBEDO_FLOOR 1e-6
 typedef enum fit_unknown_kind {
-  FIT_MODEL_SLOT, /* params[slot] */
+  FIT_MODEL_SLOT,  /* params[slot] */
   FIT_SQUARE_SLOT, /* params[slot]²: the Oren-Nayar σ, whose derivative
                      vanishes at σ = 0 (MODEL.md: "a fitter may work in
                      σ²"); f depends on σ only through σ² */
-  FIT_LOG_SLOT,   /* log params[slot]: the albedo. A flash capture sees the
-                     film's diffuse light nearly straight on, so it
-                     determines ρ e^(−τ P) with P hardly varying: a curved
-                     valley in (ρ, τ), straight in (log ρ, τ), where the
-                     solver needs 3 to 5 times fewer iterations. */
-  FIT_LOG_SCALE,  /* log s */
+  FIT_LOG_SLOT,    /* log params[slot]: the albedo. A flash capture sees the
+                      film's diffuse light nearly straight on, so it
+                      determines ρ e^(−τ P) with P hardly varying: a curved
+                      valley in (ρ, τ), straight in (log ρ, τ), where the
+                      solver needs 3 to 5 times fewer iterations. */
+  FIT_LOG_SCALE,   /* log s */
+  FIT_RESPONSE,    /* γ, the response exponent of photos whose tone curve
+                      is unknown: the prediction is (s e_k Σ f E c_i)^γ */
   FIT_LOG_EXPOSURE /* log e_k of image `slot` (the last image's is minus
                       the sum of the others: their mean log is 0) */
 } fit_unknown_kind;
+
+/* Is an unknown one of the model's slots (not the scale, an exposure or
+ * the response)? */
+static inline int fit_unknown_is_model(fit_unknown_kind kind) {
+  return kind == FIT_MODEL_SLOT || kind == FIT_SQUARE_SLOT || kind == FIT_LOG_SLOT;
+}
 
 typedef struct fit_unknown {
   fit_unknown_kind kind;
@@ -45,36 +53,56 @@ typedef struct fit_problem {
   const cf_observations *obs;
   cf_model_id model;
   int dim, lights;
-  size_t count;              /* observations used (all, or a subsample) */
-  const uint32_t *index;     /* the observations used (NULL: all, in order) */
-  cf_geometry *geometry;     /* count × lights */
-  double *weight;            /* count × lights × 3: E_c c_i (0 when unlit) */
-  double *inv_sigma;         /* count × 3; from the noise model, or 1 */
-  double *sample_root;       /* count: √(sample weight), or NULL (all 1) */
-  double sigma;              /* one σ for all (no noise model), else 0 */
+  size_t count;          /* observations used (all, or a subsample) */
+  const uint32_t *index; /* the observations used (NULL: all, in order) */
+  /* the (observation, light) pairs: observation i's are the slots
+   * [slot_begin[i], slot_begin[i + 1]), or, with slot_begin NULL, the
+   * `lights` slots from i × lights. An observation integrated over its
+   * pixel's footprint (fit_footprint.h) has S² × lights slots, one per
+   * sample and light, each weighted 1/S². */
+  size_t *slot_begin;    /* count + 1, or NULL */
+  size_t slots;          /* in all */
+  cf_geometry *geometry; /* slots */
+  double *weight;        /* slots × 3: E_c c_i (0 when unlit), over S² */
+  int *samples;          /* count: S of each observation, or NULL (all 1) */
+  double *inv_sigma;     /* count × 3; from the noise model, or 1 */
+  double *sample_root;   /* count: √(sample weight), or NULL (all 1) */
+  double sigma;          /* one σ for all (no noise model), else 0 */
   size_t images;
-  uint32_t last_image;       /* images − 1 */
+  uint32_t last_image; /* images − 1 */
 
   /* current values: what the unknowns start from and what the others are
    * held at */
   double params[CF_MAX_DIM];
   double log_scale;
-  double *log_exposures;     /* images */
+  double response;       /* γ (1: linear) */
+  int response_on;       /* apply γ (it is free, or not 1) */
+  double *log_exposures; /* images */
   int num_unknowns;
   fit_unknown unknowns[FIT_MAX_FREE];
   double lower[FIT_MAX_FREE], upper[FIT_MAX_FREE];
-  int solves, iterations;     /* tallies of fit_solve on this problem */
+  int solves, iterations; /* tallies of fit_solve on this problem */
   double solver_seconds;
   int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
                                  at its lower/upper bound by the data
                                  (lsq.h), else 0 */
 
   cf_loss loss;
-  double loss_scale;         /* in σ */
-  size_t block_size;         /* observations per residual block */
+  double loss_scale; /* in σ */
+  size_t block_size; /* observations per residual block */
   size_t num_blocks;
   int *block_residuals;
 } fit_problem;
+
+/* How near observation k's half vector comes to its normal, for any lit
+ * light: max_j n·normalize(l_j + v) (−1 when no light reaches it). */
+double fit_observation_specularity(const cf_observations *obs, size_t k);
+
+/* The pairs of one surface point with each of `lights` lights: their
+ * geometry and weights scale · E_c c_i (0 where unlit), into geometry
+ * (lights) and weight (3 × lights). */
+void fit_pairs_at(int lights, const double n[3], const double v[3], const double *light_dir,
+                  const double *irradiance, double scale, cf_geometry *geometry, double *weight);
 
 /* The observations a fit uses: all of the capture's (index NULL; count is
  * then the capture's) or the `count` listed in index. */
@@ -138,6 +166,12 @@ void fit_problem_clear_unknowns(fit_problem *p);
 void fit_problem_free_slot(fit_problem *p, int slot);
 void fit_problem_free_scale(fit_problem *p);
 void fit_problem_free_exposures(fit_problem *p);
+void fit_problem_free_response(fit_problem *p);
+
+/* The response exponent's range: from a tone curve far flatter than sRGB's
+ * (γ = 1/4) to one far steeper (γ = 4); 1 is linear. */
+#define FIT_RESPONSE_LOWER 0.25
+#define FIT_RESPONSE_UPPER 4.0
 cf_status fit_problem_finish(fit_problem *p, cf_error *err);
 
 /* σ from the noise model at the current prediction instead of the
@@ -155,13 +189,23 @@ void fit_problem_set_x(fit_problem *p, const double *x);
 
 /* lsq.h's callback: the cost of block `block` at x, and the residuals
  * and Jacobian of its Gauss-Newton model (reweighted by the loss). */
-int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost,
-                         double *residuals, double *jacobian);
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *residuals,
+                         double *jacobian);
 
 /* lsq.h's block_columns: the unknowns block `block` depends on (every
  * model slot and the scale; the exposures of its images, all of them when
  * it holds the last image, whose log exposure is minus their sum). */
 int fit_problem_block_columns(void *user, size_t block, int *columns);
+
+/* The slots of observation i (of those used): *first and the count. */
+static inline size_t fit_problem_slot_range(const fit_problem *p, size_t i, size_t *first) {
+  if (!p->slot_begin) {
+    *first = i * (size_t)p->lights;
+    return (size_t)p->lights;
+  }
+  *first = p->slot_begin[i];
+  return p->slot_begin[i + 1] - p->slot_begin[i];
+}
 
 /* Is residual i (observation i / 3 of those used, channel i % 3) censored:
  * a clipped channel whose prediction is at or above what was seen (the

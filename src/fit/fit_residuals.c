@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fit_footprint.h"
 #include "order_statistics.h"
 
 /* Per image, the observation with the brightest measurement (−1: none). */
@@ -39,11 +40,14 @@ static void add(sums *s, double e, double y) {
   ++s->n;
 }
 
-static double rms(const sums *s) { return s->n ? sqrt(s->e2 / (double)s->n) : 0.0; }
-static double relative(const sums *s) { return s->y2 > 0.0 ? sqrt(s->e2 / s->y2) : 0.0; }
+static double rms(const sums *s) {
+  return s->n ? sqrt(s->e2 / (double)s->n) : 0.0;
+}
+static double relative(const sums *s) {
+  return s->y2 > 0.0 ? sqrt(s->e2 / s->y2) : 0.0;
+}
 
-cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result *r,
-                         cf_error *err) {
+cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
   size_t n = 3 * p->count;
   double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
   sums *per_image = calloc(p->images, sizeof *per_image);
@@ -116,7 +120,8 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   }
   double median = 0.0;
   if (s == CF_OK && m > 0) {
-    if (!p->sample_root) median = fit_kth_smallest(prediction, m, m / 2);
+    if (!p->sample_root)
+      median = fit_kth_smallest(prediction, m, m / 2);
     else if (!fit_weighted_median(prediction, measured, m, &median))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
@@ -135,17 +140,23 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   *cost = 0.0;
   /* the problem at the fit's values, nothing free */
   fit_problem p;
-  cf_status s = fit_problem_init(&p, capture, fit->model, population->index, population->count, err);
+  cf_status s =
+      fit_problem_init(&p, capture, fit->model, population->index, population->count, err);
   if (s != CF_OK) return s;
   memcpy(p.params, fit->params, sizeof p.params);
   p.log_scale = log(fit->scale);
-  for (size_t k = 0; k < p.images && fit->exposures; ++k) p.log_exposures[k] = log(fit->exposures[k]);
+  p.response = fit->response_fitted ? fit->response : 1.0;
+  for (size_t k = 0; k < p.images && fit->exposures; ++k)
+    p.log_exposures[k] = log(fit->exposures[k]);
   p.loss = o->loss;
   p.loss_scale = o->loss_scale;
   fit_problem_clear_unknowns(&p);
   s = fit_problem_finish(&p, err);
-  if (s == CF_OK && fit_capture_has_noise(capture)) s = fit_problem_reweight(&p, capture, err);
-  else if (s == CF_OK) fit_problem_set_sigma(&p, capture, sigma);
+  if (s == CF_OK) s = fit_footprint_update(&p, capture, o, NULL, err);
+  if (s == CF_OK && fit_capture_has_noise(capture))
+    s = fit_problem_reweight(&p, capture, err);
+  else if (s == CF_OK)
+    fit_problem_set_sigma(&p, capture, sigma);
   for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b) {
     double block_cost;
     if (!fit_problem_evaluate(&p, NULL, b, &block_cost, NULL, NULL)) /* x: nothing is free */
@@ -156,8 +167,10 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   if (s == CF_OK) s = fit_statistics(&p, o, stats, err);
   if (s == CF_OK && fit->exposures) {
     stats->exposures = malloc(fit->images * sizeof *stats->exposures);
-    if (stats->exposures) memcpy(stats->exposures, fit->exposures, fit->images * sizeof *fit->exposures);
-    else s = cf_error_set(err, CF_ENOMEM, "out of memory");
+    if (stats->exposures)
+      memcpy(stats->exposures, fit->exposures, fit->images * sizeof *fit->exposures);
+    else
+      s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
   fit_problem_release(&p);
   if (s != CF_OK) cf_fit_result_free(stats);
@@ -173,8 +186,8 @@ cf_status cf_fit_evaluate(const cf_capture *capture, const cf_fit_result *fit,
   double cost;
   cf_status s = fit_population_of_images(capture, use_image, &population, &index, err);
   if (s == CF_OK)
-    s = fit_score_at(capture, &population, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options,
-                     &cost, stats, err);
+    s = fit_score_at(capture, &population, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options, &cost,
+                     stats, err);
   free(index);
   return s;
 }

@@ -58,7 +58,7 @@ static int scaled_model_block(const fit_problem *p, const double *jtj, int *slot
   double width[CF_MAX_DIM];
   for (int u = 0; u < n && m < CF_MAX_DIM; ++u) {
     const fit_unknown *unk = &p->unknowns[u];
-    if (unk->kind == FIT_LOG_SCALE || unk->kind == FIT_LOG_EXPOSURE || p->at_bound[u]) continue;
+    if (!fit_unknown_is_model(unk->kind) || p->at_bound[u]) continue;
     map[m] = u;
     slots[m] = unk->slot;
     width[m] = unk->kind == FIT_LOG_SLOT ? fit_slot_width(p, unk->slot) / p->params[unk->slot]
@@ -73,12 +73,13 @@ static int scaled_model_block(const fit_problem *p, const double *jtj, int *slot
 /* The covariance of the unknowns not at a bound (those at one are held
  * there: their rows and columns are 0). */
 cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
-                                 int *rank_deficient, cf_error *err) {
+                              int *rank_deficient, cf_error *err) {
   int n = p->num_unknowns, m = 0;
   int *map = malloc((size_t)n * sizeof *map);
   double *sub = malloc((size_t)n * (size_t)n * sizeof *sub);
   double *sub_covariance = malloc((size_t)n * (size_t)n * sizeof *sub_covariance);
-  cf_status s = map && sub && sub_covariance ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_status s =
+      map && sub && sub_covariance ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
   for (int u = 0; s == CF_OK && u < n; ++u)
     if (!p->at_bound[u]) map[m++] = u;
   for (int a = 0; s == CF_OK && a < m; ++a)
@@ -100,12 +101,12 @@ cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *c
  * the eigenvectors of the (width-scaled) normal matrix whose eigenvalues
  * are negligible, or whose standard deviation exceeds half their range. */
 cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
-                                    int rank_deficient, fit_plan *plan, int *found) {
+                                 int rank_deficient, fit_plan *plan, int *found) {
   *found = 0;
   if (covariance && !rank_deficient) {
     for (int u = 0; u < p->num_unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];
-      if (unk->kind == FIT_LOG_SCALE || unk->kind == FIT_LOG_EXPOSURE || p->at_bound[u]) continue;
+      if (!fit_unknown_is_model(unk->kind) || p->at_bound[u]) continue;
       double sd = fit_slot_sd(p, unk, covariance[u * p->num_unknowns + u]);
       if (sd > 0.5 * fit_slot_width(p, unk->slot)) {
         plan->status[p->unknowns[u].slot] = CF_PARAM_UNCONSTRAINED;

@@ -28,7 +28,9 @@ clayfit_fit_cli_test(fit_auto --schema ${SCHEMA}/fit.schema.json
   --expect "doc['residuals']['relative_rmse'] < 1e-4"
   --expect "len(doc['residuals']['per_image']) == 8"
   --expect "doc['timing']['choice_s'] > 0"
-  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/auto)
+  --expect "doc['footprint']['mode'] == 'centre' and doc['footprint']['observations'] == 0"
+  --expect "doc['response'] == {'value': 1.0, 'sd': 0.0, 'fitted': False, 'meaning': doc['response']['meaning']}"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/auto --footprint centre)
 clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
   --json-file ${FIT_SMALL}/hold/fit.json
   --expect "doc['model']['code'] == 'M2' and doc['choice'] == {'mode': 'forced', 'chosen': 'M2', 'candidates': []}"
@@ -37,7 +39,25 @@ clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
   --expect "doc['params']['f0']['sd'] == 0"
   --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/hold --model dielectric
-     --hold f0=0.05 --loss none)
+     --hold f0=0.05 --loss none --footprint centre)
+# An unknown tone curve: the same capture's linear EXR values decoded as
+# stored^1.5 (encoding "gamma", gamma 1.5) with tone_curve "unknown": the
+# fitted response exponent is 1.5 and the material unchanged.
+add_test(NAME cli_fit_gamma_capture
+         COMMAND ${CLAYFIT_PYTHON} -c
+         "import json, sys; d = json.load(open(sys.argv[1])); d['colour'] = {'encoding': 'gamma', 'gamma': 1.5, 'tone_curve': 'unknown'}; json.dump(d, open(sys.argv[2], 'w'), indent=2)"
+         ${FIT_SMALL}/capture.json ${FIT_SMALL}/gamma.json)
+set_tests_properties(cli_fit_gamma_capture PROPERTIES LABELS "cli;fit" FIXTURES_REQUIRED fit_small
+                     FIXTURES_SETUP fit_gamma)
+clayfit_fit_cli_test(fit_response --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/gamma/fit.json
+  --expect "doc['response']['fitted'] and abs(doc['response']['value'] - 1.5) < 1e-4"
+  --expect "0 < doc['response']['sd'] < 0.01"
+  --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
+  --expect "abs(doc['params']['f0']['value'] - 0.05) < 1e-4"
+  --expect "max(abs(a - b) for a, b in zip(doc['params']['albedo']['value'], [0.6, 0.4, 0.3])) < 1e-4"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/gamma.json -o ${FIT_SMALL}/gamma --model M2 --footprint centre)
+set_tests_properties(cli_fit_response PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma")
 # errors: exit 2 with the reason on stderr, no fit.json
 clayfit_fit_cli_test(error_fit_hold_out_of_range --exit 2 --stderr "--hold f0=0.5 is outside its range \\[0, 0.25\\]"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M2 --hold f0=0.5)
@@ -49,6 +69,12 @@ clayfit_fit_cli_test(error_fit_free_unknown --exit 2 --stderr "--free gloss: no 
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --free gloss)
 clayfit_fit_cli_test(error_fit_bad_loss --exit 2 --stderr "--loss: 'l1' is not huber, cauchy or none"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --loss l1)
+clayfit_fit_cli_test(error_fit_bad_footprint --exit 2 --stderr "--footprint: 'fine' is not auto, centre or a number"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --footprint fine)
+clayfit_fit_cli_test(error_fit_footprint_too_many --exit 2 --stderr "--footprint: '17' is not auto, centre or a number of samples per side from 1 to 16"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --footprint 17)
+clayfit_fit_cli_test(error_fit_footprint_tolerance --exit 2 --stderr "--footprint-tolerance must be in \\(0, 1\\)"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --footprint-tolerance 0)
 clayfit_fit_cli_test(error_fit_bad_model --exit 2 --stderr "M9"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M9)
 clayfit_fit_cli_test(error_fit_hold_nan --exit 2 --stderr "--hold roughness"
@@ -59,6 +85,10 @@ clayfit_cli_test(error_fit_no_capture --exit 2 --stderr "no-such-capture.json"
 # and hard-case tests already take through the same code
 clayfit_c_test(test_fit_calibration SOURCES fit/test_fit_calibration.c LIBS clayfit_fit_test_support
                LABELS "fit;slow")
+# Pixel footprints: a highlight narrower than a pixel, rendered with 4 x 4
+# and 16 x 16 samples per pixel.
+clayfit_c_test(test_fit_footprint SOURCES fit/test_fit_footprint.c LIBS clayfit_fit_test_support
+               LABELS fit)
 clayfit_c_test(test_fit_hard_cases SOURCES fit/test_fit_hard_cases.c LIBS clayfit_fit_test_support
                LABELS fit)
 # The real DiLiGenT ball (skipped without ../shared/data): about a minute.

@@ -103,3 +103,8 @@ double fit_test_error(cf_model_id model, int k, double fitted, double truth) {
     if (k >= m->offsets[j]) info = cf_param_info_get(m->params[j]);
   return fabs(fitted - truth) / fmax(fabs(truth), info->upper - info->lower);
 }
+
+void fit_test_fit_options(cf_fit_options *o, cf_model_id model, int supersample) {
+  cf_fit_default_options(o, model);
+  o->footprint = supersample;
+}

@@ -13,6 +13,11 @@
  * (the fit's own footprint), the default noise, seed 1. */
 void fit_test_synth_options(cf_synth_options *o, cf_model_id model, const double *params);
 
+/* The fit's default options for a capture rendered with `supersample`
+ * samples per pixel side, integrating the pixel footprint the same way:
+ * pixel centres for 1 (the default capture above), S × S samples for S. */
+void fit_test_fit_options(cf_fit_options *o, cf_model_id model, int supersample);
+
 /* A fresh temporary folder (the path is written into dir, at least 64
  * bytes), and its removal. */
 int fit_test_make_dir(char *dir, size_t size);

@@ -38,7 +38,7 @@ int main(void) {
     cf_capture *capture = fit_test_capture(dir, name, &so);
     if (!capture) continue;
     cf_fit_options o;
-    cf_fit_default_options(&o, CF_MODEL_DIELECTRIC);
+    fit_test_fit_options(&o, CF_MODEL_DIELECTRIC, 1);
     cf_fit_result r;
     cf_error err = {0};
     cf_status s = cf_fit_run(capture, &o, &r, &err);

@@ -49,7 +49,7 @@ static void choose(const char *dir, const choice_case *c) {
   cf_capture *capture = fit_test_capture(dir, c->name, &so);
   if (!capture) return;
   cf_fit_options options[CF_MODEL_COUNT];
-  for (int m = 0; m < CF_MODEL_COUNT; ++m) cf_fit_default_options(&options[m], (cf_model_id)m);
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) fit_test_fit_options(&options[m], (cf_model_id)m, 1);
   cf_fit_choice choice;
   cf_fit_result result;
   cf_error err = {0};

@@ -1,7 +1,8 @@
 /* Hard cases of the fit: each converges without NaN and reports what the
  * capture does and does not determine.
  *   floor_roughness  M2 at the roughness floor 0.03: a highlight narrower
- *                    than a pixel
+ *                    than a pixel, rendered and fitted with 4 × 4 samples
+ *                    per pixel (every other case: one, at the centre)
  *   half_clipped     the highlight's upper half clipped (censored, not
  *                    dropped): noise-free, so the truth is recovered
  *   f0_zero          M2 with F0 = 0: F0 ends at its bound
@@ -50,11 +51,14 @@ static void print_fit(const char *name, const cf_fit_result *r) {
   }
 }
 
-/* Fit `model` (defaults) to the capture; 0 on an error (CHECKed). */
-static int fit(const char *name, cf_capture *capture, cf_model_id model, cf_fit_result *r) {
+/* Fit `model` (defaults, the footprint integrated as the capture was
+ * rendered: `supersample` samples per side) to the capture; 0 on an error
+ * (CHECKed). */
+static int fit(const char *name, cf_capture *capture, cf_model_id model, int supersample,
+               cf_fit_result *r) {
   if (!capture) return 0;
   cf_fit_options o;
-  cf_fit_default_options(&o, model);
+  fit_test_fit_options(&o, model, supersample);
   cf_error err = {0};
   cf_status s = cf_fit_run(capture, &o, r, &err);
   CHECK(s == CF_OK, "%s: %s", name, err.message);
@@ -66,27 +70,40 @@ static int fit(const char *name, cf_capture *capture, cf_model_id model, cf_fit_
 }
 
 static const double m2_truth[CF_MAX_DIM] = {0.6, 0.4, 0.3, 0.3, 0.3, 0.05};
-static const double m4_truth[CF_MAX_DIM] = {0.7, 0.45, 0.3, 0.3, 0.2, 0.03, 0.1, 0.3, 0.6, 0.6, 0.01};
+static const double m4_truth[CF_MAX_DIM] = {0.7, 0.45, 0.3, 0.3, 0.2, 0.03,
+                                            0.1, 0.3,  0.6, 0.6, 0.01};
 
 /* The truth `base` with one slot changed, rendered (default noise) and
  * fitted with its own model; 0 on an error (CHECKed). */
-static int fit_variant(const char *name, cf_model_id model, const double *base, int slot,
-                       double value, double *truth, cf_fit_result *r) {
+static int fit_variant_sampled(const char *name, cf_model_id model, const double *base, int slot,
+                               double value, int supersample, double *truth, cf_fit_result *r) {
   memcpy(truth, base, CF_MAX_DIM * sizeof *truth);
   truth[slot] = value;
   cf_synth_options so;
   fit_test_synth_options(&so, model, truth);
-  return fit(name, fit_test_capture(root, name, &so), model, r);
+  so.supersample = supersample;
+  return fit(name, fit_test_capture(root, name, &so), model, supersample, r);
+}
+
+static int fit_variant(const char *name, cf_model_id model, const double *base, int slot,
+                       double value, double *truth, cf_fit_result *r) {
+  return fit_variant_sampled(name, model, base, slot, value, 1, truth, r);
 }
 
 static void floor_roughness(void) {
   double truth[CF_MAX_DIM];
   cf_fit_result r;
-  if (!fit_variant("floor_roughness", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_ROUGHNESS, 0.03,
-                   truth, &r))
+  if (!fit_variant_sampled("floor_roughness", CF_MODEL_DIELECTRIC, m2_truth,
+                           CF_DIELECTRIC_ROUGHNESS, 0.03, 4, truth, &r))
     return;
-  CHECK(r.params[CF_DIELECTRIC_ROUGHNESS] < 0.06, "floor_roughness: roughness %g",
-        r.params[CF_DIELECTRIC_ROUGHNESS]);
+  double rough = r.params[CF_DIELECTRIC_ROUGHNESS], rough_sd = r.sd[CF_DIELECTRIC_ROUGHNESS];
+  CHECK(r.footprint_max == 4 && r.footprint_observations > 0,
+        "floor_roughness: footprint %d samples per side over %zu observations", r.footprint_max,
+        r.footprint_observations);
+  CHECK(r.status[CF_DIELECTRIC_ROUGHNESS] == CF_PARAM_AT_BOUND
+            ? rough == 0.03
+            : fabs(rough - 0.03) < 3.0 * rough_sd,
+        "floor_roughness: roughness %g ± %g (truth 0.03)", rough, rough_sd);
   for (int c = 0; c < 3; ++c) /* F0, seen in a few pixels, and ρ are correlated through (1 − F)² */
     CHECK(fabs(r.params[c] - truth[c]) < 3.0 * r.sd[c], "floor_roughness: albedo[%d] %g ± %g", c,
           r.params[c], r.sd[c]);
@@ -119,10 +136,11 @@ static void half_clipped(void) {
   fit_test_edit_images(folder, "images", so.images, 32, find_peak, &peak);
   level = 0.5f * peak;
   fit_test_edit_images(folder, "images", so.images, 32, clip_at, &level);
-  snprintf(colour, sizeof colour, "\"encoding\": \"linear\",\n    \"clip_level\": %.17g", (double)level);
+  snprintf(colour, sizeof colour, "\"encoding\": \"linear\",\n    \"clip_level\": %.17g",
+           (double)level);
   fit_test_edit_text(folder, "capture.json", "\"encoding\": \"linear\"", colour);
   cf_fit_result r;
-  if (!fit("half_clipped", fit_test_load(folder), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit("half_clipped", fit_test_load(folder), CF_MODEL_DIELECTRIC, 1, &r)) return;
   printf("    clip level %.4g (half the dimmest image's peak)\n", level);
   CHECK(r.censored > 0, "half_clipped: nothing censored");
   for (int k = 0; k < 6; ++k)
@@ -167,7 +185,7 @@ static void thick_film(void) {
   cf_synth_options so;
   fit_test_synth_options(&so, CF_MODEL_CLAY, truth);
   cf_fit_result r;
-  if (fit("thick_film", fit_test_capture(root, "thick", &so), CF_MODEL_CLAY, &r)) {
+  if (fit("thick_film", fit_test_capture(root, "thick", &so), CF_MODEL_CLAY, 1, &r)) {
     int hidden = 1;
     for (int k = CF_CLAY_BASE_ROUGHNESS; k <= CF_CLAY_BASE_F0; ++k)
       hidden &= r.status[k] == CF_PARAM_UNCONSTRAINED || r.status[k] == CF_PARAM_AT_BOUND;
@@ -180,7 +198,7 @@ static void thick_film(void) {
   fit_test_synth_options(&so, CF_MODEL_CLAY, truth);
   so.read_noise *= 0.1;
   so.shot_noise *= 0.01;
-  if (fit("thick_film_low_noise", fit_test_capture(root, "thick8", &so), CF_MODEL_CLAY, &r)) {
+  if (fit("thick_film_low_noise", fit_test_capture(root, "thick8", &so), CF_MODEL_CLAY, 1, &r)) {
     for (int k = CF_CLAY_FILM_ROUGHNESS; k <= CF_CLAY_FILM_F0; ++k)
       CHECK(fabs(r.params[k] / truth[k] - 1.0) < 0.03, "thick_film_low_noise: slot %d %g, truth %g",
             k, r.params[k], truth[k]);
@@ -224,7 +242,7 @@ static void no_highlight(void) {
   mask_job job = {folder};
   fit_test_edit_images(folder, "masks", so.images, 16, clear_highlight, &job);
   cf_fit_result r;
-  if (!fit("no_highlight", fit_test_load(folder), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit("no_highlight", fit_test_load(folder), CF_MODEL_DIELECTRIC, 1, &r)) return;
   CHECK(r.status[CF_DIELECTRIC_ROUGHNESS] == CF_PARAM_UNCONSTRAINED,
         "no_highlight: roughness is %s", cf_param_status_name(r.status[CF_DIELECTRIC_ROUGHNESS]));
   cf_fit_result_free(&r);
@@ -252,7 +270,7 @@ static void outliers(void) {
   if (!fit_test_render(root, "outliers", &so, folder, sizeof folder)) return;
   fit_test_edit_images(folder, "images", so.images, 32, add_outliers, &count);
   cf_fit_result r;
-  if (!fit("outliers", fit_test_load(folder), CF_MODEL_DIELECTRIC, &r)) return;
+  if (!fit("outliers", fit_test_load(folder), CF_MODEL_DIELECTRIC, 1, &r)) return;
   printf("    %zu pixels brightened\n", count);
   for (int k = 0; k < 6; ++k)
     CHECK(fit_test_error(CF_MODEL_DIELECTRIC, k, r.params[k], m2_truth[k]) < 0.01,
@@ -265,12 +283,13 @@ static void outliers(void) {
 static void sigma_zero(void) {
   double truth[CF_MAX_DIM];
   cf_fit_result r;
-  if (!fit_variant("sigma_zero", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_DIFFUSE_ROUGHNESS, 0.0,
-                   truth, &r))
+  if (!fit_variant("sigma_zero", CF_MODEL_DIELECTRIC, m2_truth, CF_DIELECTRIC_DIFFUSE_ROUGHNESS,
+                   0.0, truth, &r))
     return;
   double sigma = r.params[CF_DIELECTRIC_DIFFUSE_ROUGHNESS];
   CHECK(r.status[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] == CF_PARAM_AT_BOUND || sigma < 0.05,
-        "sigma_zero: sigma %g (%s)", sigma, cf_param_status_name(r.status[CF_DIELECTRIC_DIFFUSE_ROUGHNESS]));
+        "sigma_zero: sigma %g (%s)", sigma,
+        cf_param_status_name(r.status[CF_DIELECTRIC_DIFFUSE_ROUGHNESS]));
   cf_fit_result_free(&r);
 }
 

@@ -48,7 +48,7 @@ static void recover(const truth_case *c, const char *dir) {
   if (!capture) return;
   cf_error err = {0};
   cf_fit_options options;
-  cf_fit_default_options(&options, c->model);
+  fit_test_fit_options(&options, c->model, o.supersample);
   cf_fit_result r;
   struct timespec t0;
   clock_gettime(CLOCK_MONOTONIC, &t0);

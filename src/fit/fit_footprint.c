@@ -1,0 +1,194 @@
+/* Pixel footprints in the fit (fit_footprint.h). */
+#include "fit_footprint.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static size_t observation(const fit_problem *p, size_t i) {
+  return p->index ? p->index[i] : i;
+}
+
+static double angle_between(const double a[3], const double b[3]) {
+  double cross[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]};
+  double sine = sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  return atan2(sine, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+}
+
+/* Per image, an upper bound on how far the normal turns across one pixel:
+ * 1.5 × the largest turn between horizontally adjacent observations (the
+ * capture lists an image's pixels row by row), for choosing which
+ * observations can need samples before measuring each. */
+static cf_status turn_bounds(const cf_capture *capture, double **bound, cf_error *err) {
+  const cf_observations *obs = cf_capture_observations(capture);
+  size_t images = cf_capture_image_count(capture);
+  *bound = calloc(images ? images : 1, sizeof **bound);
+  if (!*bound) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t k = 0; k + 1 < obs->count; ++k) {
+    if (obs->image[k] != obs->image[k + 1] || obs->pixel[2 * k + 1] != obs->pixel[2 * k + 3] ||
+        obs->pixel[2 * k + 2] - obs->pixel[2 * k] != 1.0f)
+      continue;
+    double turn = angle_between(obs->normal + 3 * k, obs->normal + 3 * (k + 1));
+    double *b = &(*bound)[obs->image[k]];
+    if (turn > *b) *b = turn;
+  }
+  for (size_t k = 0; k < images; ++k) (*bound)[k] *= 1.5;
+  return CF_OK;
+}
+
+/* How far the normal turns across observation k's pixel: the larger of
+ * the turns between the midpoints of its opposite edges. */
+static double pixel_turn(const cf_capture *capture, size_t k, double fallback, double *scratch,
+                         int lights) {
+  static const double edge[4][2] = {{-0.5, 0.0}, {0.5, 0.0}, {0.0, -0.5}, {0.0, 0.5}};
+  double n[4][3], view[3];
+  for (int e = 0; e < 4; ++e)
+    if (!cf_capture_footprint_at(capture, k, edge[e][0], edge[e][1], n[e], view, scratch,
+                                 scratch + 3 * (size_t)lights))
+      return fallback;
+  return fmax(angle_between(n[0], n[1]), angle_between(n[2], n[3]));
+}
+
+/* The S each observation wants (only growing from `current`). */
+static cf_status choose_samples(const fit_problem *p, const cf_capture *capture,
+                                const cf_fit_options *o, const int *current, int *samples,
+                                cf_error *err) {
+  for (size_t i = 0; i < p->count; ++i) samples[i] = current ? current[i] : 1;
+  if (o->footprint == 1) {
+    for (size_t i = 0; i < p->count; ++i) samples[i] = 1;
+    return CF_OK;
+  }
+  if (o->footprint >= 2) {
+    for (size_t i = 0; i < p->count; ++i) samples[i] = o->footprint;
+    return CF_OK;
+  }
+  double width = cf_model_lobe_width(p->model, p->params);
+  if (isinf(width)) return CF_OK;
+  double *bound, *scratch = malloc(6 * (size_t)p->lights * sizeof *scratch);
+  cf_status s =
+      scratch ? turn_bounds(capture, &bound, err) : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s != CF_OK) {
+    free(scratch);
+    return s;
+  }
+  /* S > 1 needs width² + θ² < 5 δ² / (3 tol) (cf_footprint_samples) */
+  double reach = sqrt(5.0 / (3.0 * o->footprint_tolerance)) + 0.5 * sqrt(2.0);
+  for (size_t i = 0; i < p->count; ++i) {
+    size_t k = observation(p, i);
+    double cos_h = fit_observation_specularity(p->obs, k);
+    if (cos_h <= -1.0) continue; /* unlit */
+    double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
+    if (theta_h >= reach * delta_max) continue;
+    double delta = pixel_turn(capture, k, delta_max, scratch, p->lights);
+    int want = cf_footprint_samples(width, delta, theta_h, o->footprint_tolerance,
+                                    CF_FIT_FOOTPRINT_MAX_SAMPLES);
+    if (want > samples[i]) samples[i] = want;
+  }
+  free(bound);
+  free(scratch);
+  return CF_OK;
+}
+
+/* Rebuild the pairs with samples[i]² points per observation. */
+static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples,
+                               cf_error *err) {
+  const size_t lights = (size_t)p->lights;
+  size_t *begin = malloc((p->count + 1) * sizeof *begin);
+  if (!begin) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  begin[0] = 0;
+  for (size_t i = 0; i < p->count; ++i)
+    begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
+  size_t slots = begin[p->count];
+  cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
+  double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
+  double *scratch = malloc(6 * lights * sizeof *scratch);
+  if (!geometry || !weight || !scratch) {
+    free(begin);
+    free(geometry);
+    free(weight);
+    free(scratch);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
+  }
+  const cf_observations *o = p->obs;
+  for (size_t i = 0; i < p->count; ++i) {
+    size_t k = observation(p, i), at = begin[i];
+    int n = samples[i];
+    if (n == 1) { /* the pixel centre */
+      fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
+                   o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
+      continue;
+    }
+    /* S × S points on the centred grid; a point that misses the sphere (it
+     * cannot, clear of the silhouette's margin) gets no weight and the
+     * others share it */
+    int hits = 0;
+    double normal[3], view[3];
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) {
+        size_t pair = at + ((size_t)a * (size_t)n + (size_t)b) * lights;
+        double du = (b + 0.5) / n - 0.5, dv = (a + 0.5) / n - 0.5;
+        if (cf_capture_footprint_at(capture, k, du, dv, normal, view, scratch,
+                                    scratch + 3 * lights)) {
+          fit_pairs_at(p->lights, normal, view, scratch, scratch + 3 * lights, 1.0, geometry + pair,
+                       weight + 3 * pair);
+          ++hits;
+        } else {
+          memset(geometry + pair, 0, lights * sizeof *geometry);
+          memset(weight + 3 * pair, 0, 3 * lights * sizeof *weight);
+        }
+      }
+    size_t count = (size_t)n * (size_t)n * lights;
+    if (hits == 0) { /* fall back to the centre, with zero-weight padding */
+      fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
+                   o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
+      continue;
+    }
+    for (size_t j = 0; j < 3 * count; ++j) weight[3 * at + j] /= hits;
+  }
+  free(scratch);
+  free(p->geometry);
+  free(p->weight);
+  free(p->slot_begin);
+  free(p->samples);
+  p->geometry = geometry;
+  p->weight = weight;
+  p->slot_begin = begin;
+  p->slots = slots;
+  p->samples = samples;
+  return CF_OK;
+}
+
+cf_status fit_footprint_update(fit_problem *p, const cf_capture *capture,
+                               const cf_fit_options *options, int *changed, cf_error *err) {
+  if (changed) *changed = 0;
+  int *samples = malloc((p->count ? p->count : 1) * sizeof *samples);
+  if (!samples) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_status s = choose_samples(p, capture, options, p->samples, samples, err);
+  int same = 1;
+  for (size_t i = 0; s == CF_OK && same && i < p->count; ++i)
+    same = samples[i] == (p->samples ? p->samples[i] : 1);
+  if (s != CF_OK || same) {
+    free(samples);
+    return s;
+  }
+  s = rebuild_pairs(p, capture, samples, err); /* takes samples */
+  if (s != CF_OK) {
+    free(samples);
+    return s;
+  }
+  if (changed) *changed = 1;
+  return CF_OK;
+}
+
+void fit_footprint_tally(const fit_problem *p, size_t *observations, size_t *samples,
+                         int *largest) {
+  *observations = *samples = 0;
+  *largest = 1;
+  for (size_t i = 0; p->samples && i < p->count; ++i) {
+    if (p->samples[i] < 2) continue;
+    ++*observations;
+    *samples += (size_t)p->samples[i] * (size_t)p->samples[i];
+    if (p->samples[i] > *largest) *largest = p->samples[i];
+  }
+}
