@@ -21,6 +21,7 @@
 
 #include "core/clock.h"
 #include "fit_footprint.h"
+#include "fit_hidden_base.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
@@ -311,6 +312,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
 
   /* 4. robust solves until every free parameter is constrained */
   int rank_deficient = 0;
+  fit_hidden_base hidden = {0};
   for (int round = 0; s == CF_OK && round < MAX_UNCONSTRAINED_ROUNDS; ++round) {
     fit_progress(o, "solving", (size_t)round, MAX_UNCONSTRAINED_ROUNDS);
     s = fit_solve(&p, o, o->max_iterations, &summary, err);
@@ -323,6 +325,21 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
     int found = 0;
     if (s == CF_OK) s = fit_find_unconstrained(&p, jtj, covariance, rank_deficient, &plan, &found);
+    if (s == CF_OK && !found && !hidden.tested && !rank_deficient) {
+      /* M4: is the base seen at all? (once) */
+      s = fit_test_hidden_base(&p, &plan, o, summary.final_cost, &hidden, err);
+      hidden.tested = 1;
+      if (s == CF_OK && hidden.hidden) {
+        fit_add_warning(r,
+                        "the photos do not show the base under the film: the film alone explains "
+                        "them (chi2 higher by %.3g with the base hidden, against BIC's price %.3g "
+                        "of its %d parameters), so the base's parameters are not constrained: "
+                        "held at their defaults, the optical depth at its upper bound (the data "
+                        "say only that the film hides the base)",
+                        hidden.gain, hidden.price, hidden.slots);
+        continue; /* solve again, and the covariance of the film alone */
+      }
+    }
     if (s != CF_OK || !found) break;
     double defaults[CF_MAX_DIM];
     cf_model_default_params(o->model, defaults);

@@ -7,8 +7,9 @@
  *                    dropped): noise-free, so the truth is recovered
  *   f0_zero          M2 with F0 = 0: F0 ends at its bound
  *   film_f0_floor    M4 with the film's F0 at its floor 0.01
- *   thick_film       M4 with τ = 6: the base hidden, its parameters not
- *                    constrained
+ *   thick_film       M4 with τ = 6 (and τ = 8 at a tenth of the noise):
+ *                    the base hidden, its parameters not constrained, the
+ *                    film recovered
  *   no_highlight     M2 seen through masks that hide every highlight: the
  *                    top roughness not constrained
  *   outliers         5 % of the sphere's pixels brightened (dust, flare):
@@ -173,11 +174,29 @@ static void film_f0_floor(void) {
   cf_fit_result_free(&r);
 }
 
-/* A hidden base: the photos show only the film's top lobe. At the default
- * noise a glossy base under a clearer film explains them as well (the two
- * lobe orderings of M4): the fit must then say so (the ambiguity warning)
- * or report the base as not constrained. At a tenth of the noise and
- * τ = 8 the top lobe is recovered. */
+/* A hidden base: the photos show only the film's top lobe. Its slots
+ * (albedo, σ, τ, r2, F0_2) are reported not constrained (the film alone
+ * explains the photos by BIC: fit_hidden_base.h) and the film is recovered,
+ * at the default noise with τ = 6 and at a tenth of it with τ = 8 (where
+ * a faint base lobe through a clear film would otherwise fit the noise). */
+static void check_hidden(const char *name, const cf_fit_result *r, const double *truth,
+                         double tolerance) {
+  for (int k = 0; k < CF_CLAY_DIM; ++k) {
+    char slot[48];
+    cf_model_slot_name(CF_MODEL_CLAY, k, slot, sizeof slot);
+    if (k == CF_CLAY_FILM_ROUGHNESS || k == CF_CLAY_FILM_F0)
+      CHECK(fabs(r->params[k] / truth[k] - 1.0) < tolerance && r->status[k] == CF_PARAM_FITTED,
+            "%s: %s %g (%s), truth %g", name, slot, r->params[k],
+            cf_param_status_name(r->status[k]), truth[k]);
+    else
+      CHECK(r->status[k] == CF_PARAM_UNCONSTRAINED, "%s: %s is %s, not 'not constrained'", name,
+            slot, cf_param_status_name(r->status[k]));
+  }
+  for (int c = 0; c < 3; ++c)
+    CHECK(r->params[CF_CLAY_OPTICAL_DEPTH + c] == 8.0, "%s: optical depth held at %g, not 8", name,
+          r->params[CF_CLAY_OPTICAL_DEPTH + c]);
+}
+
 static void thick_film(void) {
   double truth[CF_MAX_DIM];
   memcpy(truth, m4_truth, sizeof truth);
@@ -186,12 +205,7 @@ static void thick_film(void) {
   fit_test_synth_options(&so, CF_MODEL_CLAY, truth);
   cf_fit_result r;
   if (fit("thick_film", fit_test_capture(root, "thick", &so), CF_MODEL_CLAY, 1, &r)) {
-    int hidden = 1;
-    for (int k = CF_CLAY_BASE_ROUGHNESS; k <= CF_CLAY_BASE_F0; ++k)
-      hidden &= r.status[k] == CF_PARAM_UNCONSTRAINED || r.status[k] == CF_PARAM_AT_BOUND;
-    printf("    base %s; %s\n", hidden ? "not constrained or at a bound" : "fitted",
-           r.ambiguous ? "ambiguous (warned)" : "not ambiguous");
-    CHECK(hidden || r.ambiguous, "thick_film: base fitted and no ambiguity reported");
+    check_hidden("thick_film", &r, truth, 0.01);
     cf_fit_result_free(&r);
   }
   for (int c = 0; c < 3; ++c) truth[CF_CLAY_OPTICAL_DEPTH + c] = 8.0;
@@ -199,9 +213,7 @@ static void thick_film(void) {
   so.read_noise *= 0.1;
   so.shot_noise *= 0.01;
   if (fit("thick_film_low_noise", fit_test_capture(root, "thick8", &so), CF_MODEL_CLAY, 1, &r)) {
-    for (int k = CF_CLAY_FILM_ROUGHNESS; k <= CF_CLAY_FILM_F0; ++k)
-      CHECK(fabs(r.params[k] / truth[k] - 1.0) < 0.03, "thick_film_low_noise: slot %d %g, truth %g",
-            k, r.params[k], truth[k]);
+    check_hidden("thick_film_low_noise", &r, truth, 0.001);
     cf_fit_result_free(&r);
   }
 }
