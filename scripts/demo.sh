@@ -6,7 +6,8 @@
 # wet clay, model M4, with their COLMAP model), load it and draw the pixels
 # it uses, fit it (the model chosen from the ladder, then its parameters with
 # uncertainties: out/demo/fit/fit.json), then the evaluator's benchmark and
-# one evaluation with gradient. The presets and the report join as they land.
+# one evaluation with gradient, and the residual report of the fit
+# (out/demo/report/index.html) and its presets (out/demo/presets/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,6 +31,19 @@ echo "== clayfit fit: the model chosen from the ladder, its parameters (truth: c
 "$clayfit" fit "$out/capture/capture.json" -o "$out/fit" | tee "$out/fit.txt"
 
 echo
+echo "== clayfit export: the fitted material as presets (clayfit json, MaterialX, glTF, Blender, Mitsuba) =="
+mkdir -p "$out/presets"
+for format in json:clay.json mtlx:clay.mtlx mtlx-openpbr:clay_openpbr.mtlx gltf:clay.gltf \
+              blender:clay_blender.py mitsuba:clay_mitsuba.xml; do
+  "$clayfit" export "$out/fit/fit.json" --format "${format%%:*}" -o "$out/presets/${format#*:}"
+done
+ls "$out/presets"
+
+echo
+echo "== clayfit report: photo, re-rendering and residual of every image, plots (open report/index.html) =="
+"$clayfit" report "$out/fit/fit.json" -o "$out/report"
+
+echo
 echo "== clayfit bench eval (evaluator speed, one thread) =="
 "$clayfit" bench eval --min-time 0.5 | tee "$out/bench-eval.txt"
 
@@ -40,4 +54,4 @@ echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the o
 head -c 600 "$out/eval-clay.json"
 echo "..."
 echo
-echo "demo: outputs in $out/ (capture/, inspect/ overlays, fit/fit.json, bench-eval.txt, eval-clay.json)"
+echo "demo: outputs in $out/ (capture/, inspect/ overlays, fit/fit.json, presets/, report/index.html, bench-eval.txt, eval-clay.json)"

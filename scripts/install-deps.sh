@@ -12,7 +12,32 @@ packages=(
   colmap                             # camera poses (integration tests)
   python3 python3-jsonschema         # test harness: JSON Schema validation
   clang libclang-rt-14-dev           # libFuzzer for the binary readers' fuzz target
+  chromium                           # the report's page tested in a real browser
+  libxml2-utils                      # xmllint: the MaterialX and Mitsuba presets' tests
 )
+# Node.js and npm for the Khronos glTF validator (npm gltf-validator), from
+# Debian unless a node and an npm are already there (another Node.js, such
+# as NodeSource's, bundles npm and conflicts with Debian's npm package).
+command -v node >/dev/null || packages+=(nodejs)
+command -v npm >/dev/null || packages+=(npm)
+
+# The Khronos glTF validator for the glTF preset's tests, from the npm
+# registry into the project's build/tools/node_modules (tests/export), only
+# when missing.
+gltf_validator_version=2.0.0-dev.3.10
+install_gltf_validator() {
+  local root tools
+  root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+  tools="$root/build/tools"
+  if [ -f "$tools/node_modules/gltf-validator/package.json" ]; then
+    echo "install-deps: gltf-validator present in $tools/node_modules"
+    return 0
+  fi
+  npm view "gltf-validator@$gltf_validator_version" version >/dev/null \
+    || { echo "install-deps: npm has no gltf-validator@$gltf_validator_version" >&2; return 1; }
+  mkdir -p "$tools"
+  npm install --no-audit --no-fund --prefix "$tools" "gltf-validator@$gltf_validator_version"
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -20,6 +45,7 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
+  install_gltf_validator
   exit 0
 fi
 
@@ -31,3 +57,4 @@ fi
 echo "install-deps: installing ${missing[*]}"
 "${sudo[@]}" apt-get update -qq
 DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+install_gltf_validator

@@ -129,6 +129,15 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
 cf_status cf_capture_write_overlay(const cf_capture *capture, size_t index, const char *path,
                                    cf_error *err);
 
+/* Image `index` decoded as the observations are: linear radiance divided
+ * by the image's exposure e_k, 3 channels (include/clayfit/image.h; free
+ * with cf_image_free), and, when clipped is not NULL (width × height
+ * bytes), each pixel's clip mask (bit c: channel c clipped). For reports
+ * that show the photo beside the fit's rendering. */
+struct cf_image;
+cf_status cf_capture_read_radiance(const cf_capture *capture, size_t index,
+                                   struct cf_image *radiance, uint8_t *clipped, cf_error *err);
+
 /* Warnings raised while loading (for example, environment-map values
  * clamped to 0, an image that does not see the sphere). */
 const char *cf_capture_warning(const cf_capture *capture, size_t index);

@@ -90,7 +90,12 @@ typedef struct cf_fit_start {
   int iterations;
 } cf_fit_start;
 
-enum { CF_FIT_MAX_STARTS = 32, CF_FIT_MAX_WARNINGS = 8, CF_FIT_FOOTPRINT_MAX_SAMPLES = 16 };
+enum {
+  CF_FIT_MAX_STARTS = 32,
+  CF_FIT_MAX_WARNINGS = 8,
+  CF_FIT_FOOTPRINT_MAX_SAMPLES = 16,
+  CF_FIT_MAX_TRACE = 512
+};
 #define CF_FIT_CORE_RADIUS_PX 3.0
 
 /* The stages of a fit, for their wall times. */
@@ -135,6 +140,11 @@ typedef struct cf_fit_result {
   int solves;                /* Ceres solves of that stage */
   char termination[64];      /* of the last one */
   double solve_seconds;      /* Ceres' time in them */
+  /* the convergence trace: the cost (½ Σ ρ, σ units) at the start and
+   * after each successful iteration of those solves, in order (the weights
+   * change between solves, so it steps there) */
+  double trace[CF_FIT_MAX_TRACE];
+  int trace_count;
   double stage_seconds[CF_FIT_STAGE_COUNT]; /* wall time of each stage */
 
   /* the footprint integration of the fit on every observation */
@@ -236,7 +246,40 @@ cf_status cf_fit_evaluate(const cf_capture *capture, const cf_fit_result *fit,
                           const unsigned char *use_image, const cf_fit_options *options,
                           cf_fit_result *stats, cf_error *err);
 
+/* A fit's prediction of every observation of the capture (3 per
+ * observation, in cf_observations' order and units: radiance divided by the
+ * image's exposure), integrating the pixel footprints as options say, with
+ * the fit's scale, exposures and response; and, when sigma is not NULL,
+ * the noise σ of each (the capture's noise model at the prediction, or the
+ * fit's estimated σ). */
+cf_status cf_fit_predict(const cf_capture *capture, const cf_fit_result *fit,
+                         const cf_fit_options *options, double *prediction, double *sigma,
+                         cf_error *err);
+
 const char *cf_param_status_name(cf_param_status status);
+
+/* ---- reading fit.json back (for clayfit export and clayfit report) ---- */
+typedef struct cf_fit_file {
+  cf_fit_result result;     /* model, params, sd (NaN for null), status, scale/scale_sd/scale_fitted,
+                               response/response_sd/response_fitted, sigma, images, exposures
+                               (owned), rmse, relative_rmse, residual counts, image_rmse and
+                               image_relative_rmse (owned): as far as fit.json holds them */
+  char clayfit_version[32], created[32];
+  char capture_path[4096];  /* as written in fit.json if that file exists (relative to the
+                               current directory), else relative to fit.json's folder */
+  char capture_name[256];
+  char radiometry[32];      /* "absolute", "relative" or "from_reference" */
+  double density;           /* derived.density (NaN when derived is null) */
+  double absorption[3];     /* NaN where undefined */
+  char density_convention[512];
+  char loss[16];            /* loss.type */
+  double loss_scale;        /* loss.scale_sigma */
+  int footprint;            /* cf_fit_options.footprint: 0 auto, 1 centre, S fixed */
+  double footprint_tolerance;
+} cf_fit_file;
+/* Read fit.json back (untrusted: every field type- and range-checked, errors name the file and the JSON path). */
+cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err);
+void cf_fit_file_free(cf_fit_file *file);
 
 #ifdef __cplusplus
 }

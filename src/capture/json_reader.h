@@ -3,7 +3,9 @@
  * object for keys it does not know (a typo must not be ignored silently),
  * and every error names the file and the JSON path of the value
  * ("capture.json: lights[2].intensity[1]: expected a number, got a
- * string"). Parse errors name the line and column. Private to src/capture. */
+ * string"). Parse errors name the line and column. Private to the library:
+ * shared by src/capture and the layers above it (src/fit reads fit.json back
+ * with it, src/cli the json presets), never part of the public headers. */
 #ifndef CLAYFIT_CAPTURE_JSON_READER_H
 #define CLAYFIT_CAPTURE_JSON_READER_H
 

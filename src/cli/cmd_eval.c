@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "args.h"
+#include "clayfit/export.h"
 #include "clayfit/model.h"
 #include "cli.h"
 #include "json_out.h"
@@ -13,7 +14,8 @@ enum { MAX_PARAM_ASSIGNMENTS = 64 };
 static void eval_usage(FILE *out) {
   fprintf(out,
           "usage: clayfit eval --model M --light x,y,z --view x,y,z\n"
-          "                    [--normal x,y,z] [--param name=value ...] [--grad]\n\n"
+          "                    [--normal x,y,z] [--param name=value ...] [--grad]\n"
+          "       clayfit eval --preset PRESET.json --light x,y,z --view x,y,z [...]\n\n"
           "Prints the BRDF f(l, v) per linear-RGB channel in 1/sr (f, not "
           "f*cos) as JSON.\n"
           "Directions point away from the surface and are normalised; the "
@@ -24,7 +26,9 @@ static void eval_usage(FILE *out) {
           "every\n"
           "parameter: gradient.NAME[c] for a scalar, gradient.NAME[c][k] = "
           "df_c/dNAME_k\n"
-          "for an RGB one (c, k = 0 red, 1 green, 2 blue).\n\n");
+          "for an RGB one (c, k = 0 red, 1 green, 2 blue).\n"
+          "--preset takes the model and its parameters from a json preset (clayfit export\n"
+          "--format json); --param then overrides them.\n\n");
   cli_print_model_table(out);
 }
 
@@ -64,6 +68,7 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
     OPT_VIEW = 'v',
     OPT_NORMAL = 'n',
     OPT_GRAD = 'g',
+    OPT_PRESET = 'P',
     OPT_HELP = 'h'
   };
   static const struct option options[] = {{"model", required_argument, NULL, OPT_MODEL},
@@ -72,9 +77,10 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
                                           {"view", required_argument, NULL, OPT_VIEW},
                                           {"normal", required_argument, NULL, OPT_NORMAL},
                                           {"grad", no_argument, NULL, OPT_GRAD},
+                                          {"preset", required_argument, NULL, OPT_PRESET},
                                           {"help", no_argument, NULL, OPT_HELP},
                                           {0}};
-  const char *model_text = NULL, *light_text = NULL, *view_text = NULL;
+  const char *model_text = NULL, *light_text = NULL, *view_text = NULL, *preset = NULL;
   const char *normal_text = "0,0,1";
   const char *assignments[MAX_PARAM_ASSIGNMENTS];
   int assignment_count = 0, want_grad = 0;
@@ -97,6 +103,9 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
       case OPT_GRAD:
         want_grad = 1;
         break;
+      case OPT_PRESET:
+        preset = optarg;
+        break;
       case OPT_PARAM:
         if (assignment_count == MAX_PARAM_ASSIGNMENTS) {
           cli_report("eval", "too many --param options");
@@ -117,8 +126,12 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
     cli_report("eval", message);
     return CLI_EXIT_USAGE;
   }
-  if (!model_text || !light_text || !view_text) {
+  if ((!model_text && !preset) || !light_text || !view_text) {
     cli_report("eval", "--model, --light and --view are required (see clayfit eval --help)");
+    return CLI_EXIT_USAGE;
+  }
+  if (model_text && preset) {
+    cli_report("eval", "--model and --preset exclude each other (the preset names its model)");
     return CLI_EXIT_USAGE;
   }
 
@@ -127,8 +140,9 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
   double params[CF_MAX_DIM];
   int given[CF_MAX_DIM] = {0};
   double n[3], l[3], v[3];
-  cf_status s = cf_model_find(model_text, &model, &err);
-  if (s == CF_OK) cf_model_default_params(model, params);
+  cf_status s = preset ? cf_export_preset_read(preset, &model, params, &err)
+                       : cf_model_find(model_text, &model, &err);
+  if (s == CF_OK && !preset) cf_model_default_params(model, params);
   for (int k = 0; s == CF_OK && k < assignment_count; ++k)
     s = cli_apply_param(model, "--param", assignments[k], params, given, &err);
   if (s == CF_OK) s = cf_params_check(model, params, &err);

@@ -18,6 +18,8 @@ static const command commands[] = {
     {"synth", cmd_synth, "render a synthetic capture with known parameters"},
     {"inspect", cmd_inspect, "load a capture, summarise it, draw the pixels it uses"},
     {"fit", cmd_fit, "fit a model to a capture: parameters, uncertainty, fit.json"},
+    {"export", cmd_export, "a fit's material as a preset: json, MaterialX, glTF, Blender, Mitsuba"},
+    {"report", cmd_report, "the residual report of a fit: HTML page, pictures, plots"},
     {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
 };
 enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };

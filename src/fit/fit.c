@@ -359,6 +359,8 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     r->cost = summary.final_cost;
     r->iterations = p.iterations;
     r->solves = p.solves;
+    memcpy(r->trace, p.trace, (size_t)p.trace_count * sizeof *p.trace);
+    r->trace_count = p.trace_count;
     snprintf(r->termination, sizeof r->termination, "%s", summary.termination);
     r->solve_seconds = p.solver_seconds;
     fit_footprint_tally(&p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);

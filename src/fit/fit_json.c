@@ -259,6 +259,9 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
                         json_real(rep->choice ? rep->choice->seconds : 0.0));
   if (doc) json_object_set_new(doc, "footprint", footprint_json(rep));
   if (doc)
+    json_object_set_new(json_object_get(doc, "solver"), "trace",
+                        numbers(r->trace, r->trace_count));
+  if (doc)
     json_object_set_new(
         doc, "response",
         json_pack("{s:f, s:f, s:b, s:s}", "value", r->response, "sd", r->response_sd, "fitted",

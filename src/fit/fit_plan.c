@@ -72,6 +72,8 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   if (s == CF_OK) {
     ++p->solves;
     p->iterations += summary->iterations;
+    for (int i = 0; i < summary->trace_count && p->trace_count < CF_FIT_MAX_TRACE; ++i)
+      p->trace[p->trace_count++] = summary->trace[i];
     p->solver_seconds += summary->seconds;
   }
   return s;

@@ -82,6 +82,8 @@ typedef struct fit_problem {
   fit_unknown unknowns[FIT_MAX_FREE];
   double lower[FIT_MAX_FREE], upper[FIT_MAX_FREE];
   int solves, iterations; /* tallies of fit_solve on this problem */
+  double trace[CF_FIT_MAX_TRACE]; /* the costs of its solves' iterations, in order */
+  int trace_count;
   double solver_seconds;
   int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
                                  at its lower/upper bound by the data

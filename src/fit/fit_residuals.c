@@ -131,6 +131,33 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   return s;
 }
 
+/* The problem over a population at a fit's values (parameters, scale,
+ * response, exposures), nothing free, its footprints integrated as o says
+ * and σ from the noise model at the prediction, or `sigma` for all. On
+ * failure nothing is left to release. */
+static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
+                                const fit_population *population, const cf_fit_result *fit,
+                                double sigma, const cf_fit_options *o, cf_error *err) {
+  cf_status s = fit_problem_init(p, capture, fit->model, population->index, population->count, err);
+  if (s != CF_OK) return s;
+  memcpy(p->params, fit->params, sizeof p->params);
+  p->log_scale = log(fit->scale);
+  p->response = fit->response_fitted ? fit->response : 1.0;
+  for (size_t k = 0; k < p->images && fit->exposures; ++k)
+    p->log_exposures[k] = log(fit->exposures[k]);
+  p->loss = o->loss;
+  p->loss_scale = o->loss_scale;
+  fit_problem_clear_unknowns(p);
+  s = fit_problem_finish(p, err);
+  if (s == CF_OK) s = fit_footprint_update(p, capture, o, NULL, err);
+  if (s == CF_OK && fit_capture_has_noise(capture))
+    s = fit_problem_reweight(p, capture, err);
+  else if (s == CF_OK)
+    fit_problem_set_sigma(p, capture, sigma);
+  if (s != CF_OK) fit_problem_release(p);
+  return s;
+}
+
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
                        const cf_fit_result *fit, double sigma, const cf_fit_options *o,
                        double *cost, cf_fit_result *stats, cf_error *err) {
@@ -138,25 +165,9 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   stats->exposures = stats->image_rmse = stats->image_relative_rmse = NULL;
   stats->residuals = stats->censored = stats->rejected = 0;
   *cost = 0.0;
-  /* the problem at the fit's values, nothing free */
   fit_problem p;
-  cf_status s =
-      fit_problem_init(&p, capture, fit->model, population->index, population->count, err);
+  cf_status s = problem_at_fit(&p, capture, population, fit, sigma, o, err);
   if (s != CF_OK) return s;
-  memcpy(p.params, fit->params, sizeof p.params);
-  p.log_scale = log(fit->scale);
-  p.response = fit->response_fitted ? fit->response : 1.0;
-  for (size_t k = 0; k < p.images && fit->exposures; ++k)
-    p.log_exposures[k] = log(fit->exposures[k]);
-  p.loss = o->loss;
-  p.loss_scale = o->loss_scale;
-  fit_problem_clear_unknowns(&p);
-  s = fit_problem_finish(&p, err);
-  if (s == CF_OK) s = fit_footprint_update(&p, capture, o, NULL, err);
-  if (s == CF_OK && fit_capture_has_noise(capture))
-    s = fit_problem_reweight(&p, capture, err);
-  else if (s == CF_OK)
-    fit_problem_set_sigma(&p, capture, sigma);
   for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b) {
     double block_cost;
     if (!fit_problem_evaluate(&p, NULL, b, &block_cost, NULL, NULL)) /* x: nothing is free */
@@ -174,6 +185,23 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   }
   fit_problem_release(&p);
   if (s != CF_OK) cf_fit_result_free(stats);
+  return s;
+}
+
+cf_status cf_fit_predict(const cf_capture *capture, const cf_fit_result *fit,
+                         const cf_fit_options *options, double *prediction, double *sigma,
+                         cf_error *err) {
+  fit_problem p;
+  fit_population all = {NULL, cf_capture_observations(capture)->count};
+  cf_status s =
+      problem_at_fit(&p, capture, &all, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options, err);
+  if (s != CF_OK) return s;
+  double *measured = malloc(3 * (p.count ? p.count : 1) * sizeof *measured);
+  s = measured ? fit_problem_predict(&p, prediction, measured, err)
+               : cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t i = 0; s == CF_OK && sigma && i < 3 * p.count; ++i) sigma[i] = 1.0 / p.inv_sigma[i];
+  free(measured);
+  fit_problem_release(&p);
   return s;
 }
 

@@ -59,8 +59,14 @@ typedef struct cf_lsq_options {
 
 void cf_lsq_default_options(cf_lsq_options *options);
 
+enum { CF_LSQ_TRACE = 256 };
+
 typedef struct cf_lsq_summary {
   double initial_cost, final_cost; /* ½ Σ r² */
+  /* the cost at the start and after every successful iteration (the
+   * first CF_LSQ_TRACE) */
+  double trace[CF_LSQ_TRACE];
+  int trace_count;
   int iterations;
   int converged;                   /* Ceres' CONVERGENCE */
   char termination[64];

@@ -378,7 +378,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem* problem, const cf_lsq_options*
       active[i] = problem->x[i] <= problem->lower[i] ? -1 : problem->x[i] >= problem->upper[i] ? 1 : 0;
     std::vector<double> gradient;
     ceres::Solver::Summary ceres_summary;
-    int iterations = 0;
+    int iterations = 0, trace_count = 0;
     double seconds = 0.0, initial_cost = 0.0;
     std::vector<double> x0(n);
     int extrapolations = 0;
@@ -389,6 +389,12 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem* problem, const cf_lsq_options*
       solve_once(problem, options, active, budget, &watcher, &ceres_summary);
       if (round == 0 && extrapolations == 0 && iterations == 0)
         initial_cost = ceres_summary.initial_cost;
+      for (size_t i = 0; i < ceres_summary.iterations.size(); ++i) {  // the trace
+        const ceres::IterationSummary& it = ceres_summary.iterations[i];
+        bool first = i == 0 && iterations == 0 && round == 0 && extrapolations == 0;
+        if ((first || (i > 0 && it.step_is_successful)) && trace_count < CF_LSQ_TRACE)
+          summary->trace[trace_count++] = it.cost;
+      }
       iterations += std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
       seconds += ceres_summary.total_time_in_seconds;
       if (ceres_summary.termination_type == ceres::FAILURE) break;
@@ -425,6 +431,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem* problem, const cf_lsq_options*
     summary->initial_cost = initial_cost;
     summary->final_cost = ceres_summary.final_cost;
     summary->iterations = iterations;
+    summary->trace_count = trace_count;
     summary->converged = ceres_summary.termination_type == ceres::CONVERGENCE;
     summary->seconds = seconds;
     copy_termination(ceres_summary, summary);

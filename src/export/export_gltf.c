@@ -1,0 +1,260 @@
+/* glTF 2.0 (Khronos, registry.khronos.org/glTF/specs/2.0): one material on
+ * a UV sphere whose vertices are in a base64 data URI, so that the .gltf
+ * is self-contained and opens in any viewer. The material uses the core
+ * metallic-roughness model (Lambertian diffuse, GGX with height-correlated
+ * Smith and Schlick's Fresnel on v.h: the glTF 2.0 spec, Appendix B) and
+ * the extensions KHR_materials_clearcoat (coat F0 fixed at 0.04, IOR 1.5),
+ * KHR_materials_ior and KHR_materials_specular where they apply. glTF JSON
+ * has no comments: the notes are in asset.extras.clayfit. */
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "export_internal.h"
+
+enum { SPHERE_RINGS = 32, SPHERE_SEGMENTS = 64 };
+
+static char *base64(const unsigned char *data, size_t size) {
+  static const char table[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  char *out = malloc(4 * ((size + 2) / 3) + 1);
+  if (!out) return NULL;
+  size_t o = 0;
+  for (size_t i = 0; i < size; i += 3) {
+    uint32_t v = (uint32_t)data[i] << 16;
+    if (i + 1 < size) v |= (uint32_t)data[i + 1] << 8;
+    if (i + 2 < size) v |= data[i + 2];
+    out[o++] = table[(v >> 18) & 63];
+    out[o++] = table[(v >> 12) & 63];
+    out[o++] = i + 1 < size ? table[(v >> 6) & 63] : '=';
+    out[o++] = i + 2 < size ? table[v & 63] : '=';
+  }
+  out[o] = '\0';
+  return out;
+}
+
+/* The unit sphere, y up (glTF's convention): positions and normals as
+ * float32, then uint16 indices of counter-clockwise triangles seen from
+ * outside. */
+typedef struct sphere_mesh {
+  unsigned char *bytes;
+  size_t vertices, indices, position_bytes, index_bytes, size;
+  float min[3], max[3];
+} sphere_mesh;
+
+static int make_sphere(sphere_mesh *s) {
+  s->vertices = (size_t)(SPHERE_RINGS + 1) * (SPHERE_SEGMENTS + 1);
+  s->indices = (size_t)SPHERE_RINGS * SPHERE_SEGMENTS * 6;
+  s->position_bytes = s->vertices * 3 * sizeof(float);
+  s->index_bytes = s->indices * sizeof(uint16_t);
+  s->size = 2 * s->position_bytes + s->index_bytes;
+  s->bytes = calloc(1, s->size);
+  if (!s->bytes) return 0;
+  float *position = (float *)s->bytes, *normal = (float *)(s->bytes + s->position_bytes);
+  uint16_t *index = (uint16_t *)(s->bytes + 2 * s->position_bytes);
+  for (int c = 0; c < 3; ++c) s->min[c] = 1e30f, s->max[c] = -1e30f;
+  size_t v = 0;
+  for (int i = 0; i <= SPHERE_RINGS; ++i) {
+    double theta = EXPORT_PI * i / SPHERE_RINGS;
+    for (int j = 0; j <= SPHERE_SEGMENTS; ++j, ++v) {
+      double phi = 2.0 * EXPORT_PI * j / SPHERE_SEGMENTS;
+      double p[3] = {sin(theta) * sin(phi), cos(theta), sin(theta) * cos(phi)};
+      double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+      for (int c = 0; c < 3; ++c) {
+        position[3 * v + c] = (float)p[c];
+        normal[3 * v + c] = (float)(p[c] / len);
+        if (position[3 * v + c] < s->min[c]) s->min[c] = position[3 * v + c];
+        if (position[3 * v + c] > s->max[c]) s->max[c] = position[3 * v + c];
+      }
+    }
+  }
+  size_t k = 0;
+  for (int i = 0; i < SPHERE_RINGS; ++i)
+    for (int j = 0; j < SPHERE_SEGMENTS; ++j) {
+      uint16_t a = (uint16_t)(i * (SPHERE_SEGMENTS + 1) + j),
+               b = (uint16_t)(a + SPHERE_SEGMENTS + 1);
+      /* a (upper left), b below it; phi grows toward +x from +z */
+      index[k++] = a, index[k++] = b, index[k++] = (uint16_t)(a + 1);
+      index[k++] = (uint16_t)(a + 1), index[k++] = b, index[k++] = (uint16_t)(b + 1);
+    }
+  return 1;
+}
+
+static json_t *floats3(const float *x) {
+  return json_pack("[f, f, f]", (double)x[0], (double)x[1], (double)x[2]);
+}
+
+static json_t *rgb(const double *x, int alpha) {
+  json_t *a = json_pack("[f, f, f]", x[0], x[1], x[2]);
+  if (alpha) json_array_append_new(a, json_real(1.0));
+  return a;
+}
+
+/* A [0, 1] factor: outside, the nearest end is written (glTF's schema
+ * allows nothing else) and the change reported. */
+static double factor(export_notes *n, const char *name, double x) {
+  if (x >= 0.0 && x <= 1.0) return x;
+  double y = x < 0.0 ? 0.0 : 1.0;
+  export_note(n, EXPORT_RANGE, "%s = %.6g is outside glTF's range [0, 1]: written as %g", name, x,
+              y);
+  return y;
+}
+
+static json_t *material_json(const export_material *m, export_notes *n, json_t *used) {
+  json_t *ext = json_object();
+  double base[3], roughness = 1.0;
+  memcpy(base, m->albedo, sizeof base);
+  if (m->model != CF_MODEL_LAMBERT)
+    export_note(n, EXPORT_DROPPED,
+                "diffuse_roughness sigma %.6g rad: glTF's diffuse is Lambertian (no ratified "
+                "extension has diffuse roughness)",
+                m->sigma);
+  if (m->model == CF_MODEL_LAMBERT || m->model == CF_MODEL_OREN_NAYAR) {
+    json_object_set_new(ext, "KHR_materials_specular", json_pack("{s:f}", "specularFactor", 0.0));
+    export_note(n, EXPORT_EXACT,
+                "no specular lobe in %s: KHR_materials_specular specularFactor 0 (scales the "
+                "dielectric Fresnel, grazing term included, to 0: the diffuse alone remains)",
+                m->info->code);
+  } else if (m->model == CF_MODEL_CLAY) {
+    double coat = m->film_f0 / 0.04;
+    roughness = m->base_roughness;
+    for (int c = 0; c < 3; ++c) base[c] *= m->transmittance[c];
+    json_object_set_new(ext, "KHR_materials_clearcoat",
+                        json_pack("{s:f, s:f}", "clearcoatFactor",
+                                  factor(n, "clearcoatFactor = film_f0 / 0.04", coat),
+                                  "clearcoatRoughnessFactor", m->film_roughness));
+    json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->base_ior_rel));
+    json_object_set_new(ext, "KHR_materials_specular",
+                        json_pack("{s:f, s:o}", "specularFactor", 1.0, "specularColorFactor",
+                                  rgb(m->transmittance, 0)));
+    export_note(n, EXPORT_EXACT,
+                "film_roughness %.6g -> clearcoatRoughnessFactor (GGX, alpha = r^2)",
+                m->film_roughness);
+    export_note(n, EXPORT_APPROX,
+                "film_f0 %.6g: the clear coat's F0 is fixed at 0.04 (IOR 1.5), so "
+                "clearcoatFactor = film_f0 / 0.04 = %.6g gives the film's reflectance at normal "
+                "incidence; at grazing angles the coat reflects clearcoatFactor times too little",
+                m->film_f0, coat);
+    export_note(n, EXPORT_APPROX,
+                "the film's colour exp(-2 tau) multiplies baseColorFactor (albedo x "
+                "transmittance) and is KHR_materials_specular's specularColorFactor (the base "
+                "lobe seen through the film): glTF's clear coat has no tint");
+    export_note(n, EXPORT_APPROX,
+                "base lobe: roughnessFactor = base_roughness %.6g, KHR_materials_ior ior = the "
+                "relative IOR %.6g (glTF evaluates the base as in air under the coat, so its F0 "
+                "is base_f0 %.6g), not at the refracted directions",
+                m->base_roughness, m->base_ior_rel, m->base_f0);
+  } else {
+    roughness = m->roughness;
+    json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->ior));
+    export_note(n, EXPORT_EXACT,
+                "roughness %.6g -> roughnessFactor, f0 %.6g -> KHR_materials_ior ior %.6g: glTF's "
+                "specular lobe is MODEL.md's (GGX, height-correlated Smith, Schlick on v.h)",
+                m->roughness, m->f0, m->ior);
+    export_note(n, EXPORT_APPROX,
+                "glTF's fresnel_mix scales the diffuse by 1 - F(v.h) instead of "
+                "(1 - F(c_i))(1 - F(c_o))");
+    if (m->model == CF_MODEL_CLEARCOAT) {
+      double weight = 0.25 * m->coat_weight, r = sqrt(m->gtr1_a);
+      json_object_set_new(
+          ext, "KHR_materials_clearcoat",
+          json_pack("{s:f, s:f}", "clearcoatFactor", weight, "clearcoatRoughnessFactor", r));
+      export_note(n, EXPORT_APPROX,
+                  "Burley's clear coat (GTR1 width a = %.6g) -> clearcoatFactor = 0.25 "
+                  "coat_weight = %.6g (the same F0 0.04), clearcoatRoughnessFactor = sqrt(a) = "
+                  "%.6g: a GGX lobe without GTR1's tail, which also darkens the base",
+                  m->gtr1_a, weight, r);
+    }
+  }
+  const char *key;
+  json_t *value;
+  json_object_foreach(ext, key, value) json_array_append_new(used, json_string(key));
+  json_t *material =
+      json_pack("{s:s, s:{s:o, s:f, s:f}, s:o}", "name", m->info->name, "pbrMetallicRoughness",
+                "baseColorFactor", rgb(base, 1), "metallicFactor", 0.0, "roughnessFactor",
+                roughness, "extensions", ext);
+  return material;
+}
+
+static json_t *notes_json(const export_notes *n) {
+  static const char *const names[] = {"exact", "approximate", "dropped", "out_of_range"};
+  json_t *out = json_object();
+  for (int kind = 0; kind < 4; ++kind) {
+    json_t *list = json_array();
+    for (int i = 0; i < n->count; ++i)
+      if ((int)n->kind[i] == kind) json_array_append_new(list, json_string(n->text[i]));
+    json_object_set_new(out, names[kind], list);
+  }
+  return out;
+}
+
+cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *path,
+                      export_notes *notes, cf_error *err) {
+  export_material m;
+  export_material_from_fit(fit, &m);
+  export_common_notes(notes, &m);
+  json_t *used = json_array();
+  json_t *material = material_json(&m, notes, used);
+  sphere_mesh s = {0};
+  if (!make_sphere(&s)) {
+    json_decref(used);
+    json_decref(material);
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory for the sphere", path);
+  }
+  char *data = base64(s.bytes, s.size);
+  size_t uri_size = data ? strlen(data) + 64 : 0;
+  char *uri = data ? malloc(uri_size) : NULL;
+  if (uri) snprintf(uri, uri_size, "data:application/octet-stream;base64,%s", data);
+  free(data);
+  export_text prov = {0};
+  export_provenance(&prov, fit, fit_path, "");
+  json_t *doc = NULL;
+  if (uri && !prov.failed) {
+    float nmin[3] = {-1, -1, -1}, nmax[3] = {1, 1, 1};
+    const float *normals = (const float *)(s.bytes + s.position_bytes);
+    for (int c = 0; c < 3; ++c) nmin[c] = 1e30f, nmax[c] = -1e30f;
+    for (size_t v = 0; v < s.vertices; ++v)
+      for (int c = 0; c < 3; ++c) {
+        float x = normals[3 * v + c];
+        if (x < nmin[c]) nmin[c] = x;
+        if (x > nmax[c]) nmax[c] = x;
+      }
+    doc = json_pack(
+        "{s:{s:s, s:s, s:{s:{s:s, s:o}}}, s:i, s:[{s:[i]}], s:[{s:s, s:i}], "
+        "s:[{s:s, s:[{s:{s:i, s:i}, s:i, s:i, s:i}]}], s:[o], "
+        "s:[{s:I, s:s}], "
+        "s:[{s:i, s:I, s:I, s:i}, {s:i, s:I, s:I, s:i}, {s:i, s:I, s:I, s:i}], "
+        "s:[{s:i, s:i, s:I, s:s, s:o, s:o}, {s:i, s:i, s:I, s:s, s:o, s:o}, "
+        "{s:i, s:i, s:I, s:s}], s:o}",
+        "asset", "version", "2.0", "generator", "clayfit " CLAYFIT_EXPORT_VERSION, "extras",
+        "clayfit", "provenance", prov.data, "mapping", notes_json(notes), "scene", 0, "scenes",
+        "nodes", 0, "nodes", "name", "clayfit_sphere", "mesh", 0, "meshes", "name",
+        "clayfit_sphere", "primitives", "attributes", "POSITION", 0, "NORMAL", 1, "indices", 2,
+        "material", 0, "mode", 4, "materials", material, "buffers", "byteLength",
+        (json_int_t)s.size, "uri", uri, "bufferViews", "buffer", 0, "byteOffset", (json_int_t)0,
+        "byteLength", (json_int_t)s.position_bytes, "target", 34962, "buffer", 0, "byteOffset",
+        (json_int_t)s.position_bytes, "byteLength", (json_int_t)s.position_bytes, "target", 34962,
+        "buffer", 0, "byteOffset", (json_int_t)(2 * s.position_bytes), "byteLength",
+        (json_int_t)s.index_bytes, "target", 34963, "accessors", "bufferView", 0, "componentType",
+        5126, "count", (json_int_t)s.vertices, "type", "VEC3", "min", floats3(s.min), "max",
+        floats3(s.max), "bufferView", 1, "componentType", 5126, "count", (json_int_t)s.vertices,
+        "type", "VEC3", "min", floats3(nmin), "max", floats3(nmax), "bufferView", 2,
+        "componentType", 5123, "count", (json_int_t)s.indices, "type", "SCALAR", "extensionsUsed",
+        used);
+    material = NULL;
+    used = NULL;
+  }
+  json_decref(material);
+  json_decref(used);
+  free(uri);
+  free(s.bytes);
+  export_text_free(&prov);
+  if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the glTF", path);
+  if (json_array_size(json_object_get(doc, "extensionsUsed")) == 0)
+    json_object_del(doc, "extensionsUsed");
+  /* the index accessor's min and max are not required; the vertex ones are */
+  int failed = json_dump_file(doc, path, JSON_INDENT(1) | JSON_REAL_PRECISION(9)) != 0;
+  json_decref(doc);
+  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+}

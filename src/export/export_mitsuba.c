@@ -1,0 +1,122 @@
+/* A Mitsuba 3 scene fragment: one <bsdf> in a <scene version="3.0.0">.
+ * Plugins and parameter names are Mitsuba 3's (mitsuba.readthedocs.io,
+ * "BSDFs": diffuse (reflectance), roughplastic (distribution, alpha,
+ * int_ior, ext_ior, diffuse_reflectance, nonlinear), principled
+ * (base_color, roughness, metallic, eta, spec_tint, clearcoat,
+ * clearcoat_gloss)). Mitsuba 3 has no Oren-Nayar BSDF and no coating
+ * plugin. roughplastic's alpha is the GGX width itself; principled's
+ * roughness is perceptual (alpha = roughness^2, Burley 2012). */
+#include <math.h>
+#include <stdio.h>
+
+#include "export_internal.h"
+
+static void rgb(export_text *t, const char *name, const double *x) {
+  export_printf(t, "    <rgb name=\"%s\" value=\"%.9g, %.9g, %.9g\"/>\n", name, x[0], x[1], x[2]);
+}
+
+static void num(export_text *t, const char *name, double x) {
+  export_printf(t, "    <float name=\"%s\" value=\"%.9g\"/>\n", name, x);
+}
+
+cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const char *path,
+                         export_notes *n, cf_error *err) {
+  export_material m;
+  export_material_from_fit(fit, &m);
+  export_common_notes(n, &m);
+  if (m.model != CF_MODEL_LAMBERT)
+    export_note(n, EXPORT_DROPPED,
+                "diffuse_roughness sigma %.6g rad: Mitsuba 3 has no Oren-Nayar diffuse", m.sigma);
+  export_text body = {0};
+  const char *type = "diffuse";
+  if (m.model == CF_MODEL_LAMBERT || m.model == CF_MODEL_OREN_NAYAR) {
+    rgb(&body, "reflectance", m.albedo);
+    export_note(n, EXPORT_EXACT, "%s has no specular lobe: the diffuse plugin (Lambert)",
+                m.info->code);
+  } else if (m.model == CF_MODEL_DIELECTRIC) {
+    type = "roughplastic";
+    export_printf(&body, "    <string name=\"distribution\" value=\"ggx\"/>\n");
+    num(&body, "alpha", m.roughness * m.roughness);
+    num(&body, "int_ior", m.ior);
+    num(&body, "ext_ior", 1.0);
+    rgb(&body, "diffuse_reflectance", m.albedo);
+    export_printf(&body, "    <boolean name=\"nonlinear\" value=\"false\"/>\n");
+    export_note(n, EXPORT_EXACT, "roughness %.6g -> alpha = r^2 = %.6g (GGX)", m.roughness,
+                m.roughness * m.roughness);
+    export_note(n, EXPORT_APPROX,
+                "f0 %.6g -> int_ior %.6g: roughplastic uses the exact dielectric Fresnel and "
+                "scatters the diffuse inside the coating (internal reflection), not "
+                "(1 - F(c_i))(1 - F(c_o))",
+                m.f0, m.ior);
+  } else {
+    type = "principled";
+    double base[3] = {m.albedo[0], m.albedo[1], m.albedo[2]};
+    double roughness = m.roughness, eta = m.ior, clearcoat = 0.0, gloss = 0.0;
+    if (m.model == CF_MODEL_CLEARCOAT) {
+      clearcoat = m.coat_weight;
+      gloss = m.coat_gloss;
+      export_note(n, EXPORT_APPROX,
+                  "clearcoat = coat_weight %.6g, clearcoat_gloss = coat_gloss %.6g: principled "
+                  "is Burley's model, whose clear coat (GTR1, F0 0.04) M3 takes; its base "
+                  "(Burley's diffuse with retro-reflection, the exact Fresnel of eta %.6g, from "
+                  "f0 %.6g) differs from M2's; roughness %.6g is perceptual there too (alpha = "
+                  "roughness^2, Burley 2012)",
+                  m.coat_weight, m.coat_gloss, m.ior, m.f0, m.roughness);
+    } else {
+      double a = m.film_roughness * m.film_roughness;
+      double g = (0.1 - a) / 0.099;
+      clearcoat = m.film_f0 / 0.04;
+      gloss = g;
+      roughness = m.base_roughness;
+      eta = m.base_ior_rel;
+      for (int c = 0; c < 3; ++c) base[c] *= m.transmittance[c];
+      if (clearcoat > 1.0) {
+        export_note(n, EXPORT_RANGE,
+                    "clearcoat = film_f0 / 0.04 = %.6g is above 1: written as 1 (the film "
+                    "reflects more than principled's coat can)",
+                    clearcoat);
+        clearcoat = 1.0;
+      }
+      if (g < 0.0 || g > 1.0) {
+        gloss = g < 0.0 ? 0.0 : 1.0;
+        export_note(n, EXPORT_RANGE,
+                    "clearcoat_gloss for film alpha %.6g would be %.6g, outside [0, 1] (GTR1 "
+                    "widths 0.001 to 0.1): written as %g",
+                    a, g, gloss);
+      }
+      export_note(n, EXPORT_APPROX,
+                  "the film -> principled's clear coat: clearcoat = film_f0 / 0.04 = %.6g (its F0 "
+                  "is fixed at 0.04), clearcoat_gloss from GTR1 width a = film alpha %.6g; GTR1 "
+                  "is not GGX and the coat has no colour: exp(-2 tau) multiplies base_color",
+                  m.film_f0 / 0.04, a);
+      export_note(n, EXPORT_APPROX,
+                  "base lobe: roughness = base_roughness %.6g (perceptual, alpha = roughness^2), "
+                  "eta = the relative IOR %.6g (the "
+                  "base is evaluated as in air, so its F0 is base_f0 %.6g)",
+                  m.base_roughness, m.base_ior_rel, m.base_f0);
+    }
+    if (eta <= 1.0)
+      export_note(n, EXPORT_RANGE,
+                  "eta = %.6g: principled needs an IOR above 1 for a specular lobe", eta);
+    rgb(&body, "base_color", base);
+    num(&body, "roughness", roughness);
+    num(&body, "metallic", 0.0);
+    num(&body, "eta", eta);
+    num(&body, "spec_tint", 0.0);
+    num(&body, "clearcoat", clearcoat);
+    num(&body, "clearcoat_gloss", gloss);
+  }
+  export_text t = {0};
+  export_printf(&t, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<!--\n");
+  export_provenance(&t, fit, fit_path, "  ");
+  export_printf(&t, "  Mitsuba 3 scene fragment: include it or copy the <bsdf> into a scene.\n");
+  export_notes_write(&t, n, "  ");
+  export_printf(&t, "-->\n<scene version=\"3.0.0\">\n  <bsdf type=\"%s\" id=\"clayfit_%s\">\n",
+                type, m.info->name);
+  export_printf(&t, "%s", body.failed || !body.data ? "" : body.data);
+  int failed = body.failed;
+  export_text_free(&body);
+  export_printf(&t, "  </bsdf>\n</scene>\n");
+  if (failed) t.failed = 1;
+  return export_text_write(&t, path, err);
+}

@@ -1,0 +1,116 @@
+/* Each image's photo, its re-rendering with the fitted parameters and the
+ * signed residual heat map, cropped around the sphere (report_internal.h). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clayfit/image.h"
+#include "report_internal.h"
+
+enum { CROP_MARGIN = 8 };
+
+/* The residual colour scale, in linear RGB: blue at −1, white at 0, red at
+ * +1 (of CF_REPORT_SIGMA_RANGE σ); the marks' colours. */
+static const float cold[3] = {0.05f, 0.15f, 0.75f}, hot[3] = {0.75f, 0.02f, 0.03f};
+static const float censored_colour[3] = {1.0f, 0.0f, 1.0f},
+                   rejected_colour[3] = {0.0f, 0.45f, 0.0f};
+static const float background[3] = {0.12f, 0.12f, 0.12f};
+
+void report_residual_colour(double r, float rgb[3]) {
+  double t = r / CF_REPORT_SIGMA_RANGE;
+  t = t < -1.0 ? -1.0 : t > 1.0 ? 1.0 : t; /* the scale's ends (display only) */
+  const float *end = t < 0.0 ? cold : hot;
+  double a = fabs(t);
+  for (int c = 0; c < 3; ++c) rgb[c] = (float)((1.0 - a) * 1.0 + a * end[c]);
+}
+
+static int compare_float(const void *a, const void *b) {
+  float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+/* The display's white: the 99.5th percentile of the image's measured
+ * values (over its observations and channels). */
+static double white_point(const report_data *d, size_t k) {
+  size_t n = 3 * d->observations[k], m = 0;
+  float *values = n ? malloc(n * sizeof *values) : NULL;
+  if (!values) return 1.0;
+  for (size_t i = d->first[k]; i < d->last[k]; ++i)
+    if (d->obs->image[i] == k)
+      for (int c = 0; c < 3; ++c) values[m++] = (float)d->obs->rgb[3 * i + c];
+  qsort(values, m, sizeof *values, compare_float);
+  double white = m ? values[(size_t)(0.995 * (double)(m - 1))] : 1.0;
+  free(values);
+  return white > 0.0 ? white : 1.0;
+}
+
+static cf_status write_srgb(const char *dir, const char *name, cf_image *picture, cf_error *err) {
+  size_t n = 3 * (size_t)picture->width * (size_t)picture->height;
+  for (size_t i = 0; i < n; ++i)
+    picture->pixels[i] = (float)cf_linear_to_srgb(fmin(1.0, fmax(0.0, picture->pixels[i])));
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  return cf_image_write(path, picture, 8, err);
+}
+
+cf_status report_image(const report_data *d, size_t k, const char *dir, char names[3][64],
+                       cf_error *err) {
+  const cf_observations *o = d->obs;
+  const cf_capture_image *info = cf_capture_image_at(d->capture, k);
+  int box[4] = {info->width, info->height, 0, 0};
+  for (size_t i = d->first[k]; i < d->last[k]; ++i) {
+    if (o->image[i] != k) continue;
+    int x = (int)o->pixel[2 * i], y = (int)o->pixel[2 * i + 1];
+    if (x < box[0]) box[0] = x;
+    if (y < box[1]) box[1] = y;
+    if (x + 1 > box[2]) box[2] = x + 1;
+    if (y + 1 > box[3]) box[3] = y + 1;
+  }
+  if (box[2] <= box[0]) box[0] = box[1] = 0, box[2] = info->width, box[3] = info->height;
+  box[0] = box[0] - CROP_MARGIN < 0 ? 0 : box[0] - CROP_MARGIN;
+  box[1] = box[1] - CROP_MARGIN < 0 ? 0 : box[1] - CROP_MARGIN;
+  box[2] = box[2] + CROP_MARGIN > info->width ? info->width : box[2] + CROP_MARGIN;
+  box[3] = box[3] + CROP_MARGIN > info->height ? info->height : box[3] + CROP_MARGIN;
+  int w = box[2] - box[0], h = box[3] - box[1];
+
+  cf_image radiance = {0}, picture[3] = {{0}};
+  cf_status s = cf_capture_read_radiance(d->capture, k, &radiance, NULL, err);
+  for (int p = 0; s == CF_OK && p < 3; ++p) s = cf_image_alloc(&picture[p], w, h, 3, err);
+  if (s == CF_OK) {
+    double white = white_point(d, k);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        size_t at = 3 * ((size_t)y * (size_t)w + (size_t)x);
+        size_t from = 3 * ((size_t)(y + box[1]) * (size_t)radiance.width + (size_t)(x + box[0]));
+        for (int c = 0; c < 3; ++c) {
+          picture[0].pixels[at + c] = picture[1].pixels[at + c] =
+              (float)(radiance.pixels[from + c] / white);
+          picture[2].pixels[at + c] = background[c];
+        }
+      }
+    for (size_t i = d->first[k]; i < d->last[k]; ++i) {
+      if (o->image[i] != k) continue;
+      int x = (int)o->pixel[2 * i] - box[0], y = (int)o->pixel[2 * i + 1] - box[1];
+      size_t at = 3 * ((size_t)y * (size_t)w + (size_t)x);
+      for (int c = 0; c < 3; ++c)
+        picture[1].pixels[at + c] = (float)(d->prediction[3 * i + c] / white);
+      float rgb[3];
+      if ((d->mark[i] & REPORT_CENSORED) || isnan(d->residual[i]))
+        memcpy(rgb, censored_colour, sizeof rgb);
+      else if (d->mark[i] & REPORT_REJECTED)
+        memcpy(rgb, rejected_colour, sizeof rgb);
+      else
+        report_residual_colour(d->residual[i], rgb);
+      memcpy(picture[2].pixels + at, rgb, sizeof rgb);
+    }
+    static const char *const kinds[3] = {"photo", "render", "residual"};
+    for (int p = 0; s == CF_OK && p < 3; ++p) {
+      snprintf(names[p], 64, "images/%03zu_%s.png", k, kinds[p]);
+      s = write_srgb(dir, names[p], &picture[p], err);
+    }
+  }
+  cf_image_free(&radiance);
+  for (int p = 0; p < 3; ++p) cf_image_free(&picture[p]);
+  return s;
+}

@@ -1,0 +1,67 @@
+/* The report's parts (include/clayfit/report.h): the residuals and angles
+ * of every observation (report_data.c), the per-image pictures
+ * (report_images.c), the plots (report_plots.c over the SVG writer
+ * svg.c), report.json (report_json.c) and the page (report_html.c).
+ * Private to src/report. */
+#ifndef CLAYFIT_REPORT_INTERNAL_H
+#define CLAYFIT_REPORT_INTERNAL_H
+
+#include <jansson.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "clayfit/report.h"
+
+enum { REPORT_CENSORED = 1u << 0, REPORT_REJECTED = 1u << 1 };
+
+typedef struct report_data {
+  const cf_capture *capture;
+  const cf_fit_file *fit;
+  const cf_observations *obs;
+  size_t count, images;
+  double *prediction, *sigma; /* 3 × count */
+  float *residual;            /* count: Σ_c (prediction − y)/σ over the m channels not
+                                 censored, over √m (N(0, 1) for noise alone); NaN
+                                 where all are */
+  uint8_t *mark;              /* count: REPORT_CENSORED, REPORT_REJECTED (beyond the loss) */
+  float *half_angle;          /* count: degrees between n and the nearest half vector */
+  float *view_angle;          /* count: degrees between n and v */
+  double loss_scale;          /* in σ */
+  /* per image */
+  size_t *censored, *rejected, *observations;
+  size_t *first, *last; /* the range of observations holding image k's
+                           (the capture lists them image by image) */
+  double *rms_sigma;    /* RMS of residual, σ units */
+  json_t *doc;          /* fit.json as read (for the choice, solver, timings); may be NULL */
+} report_data;
+
+cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_fit_file *fit,
+                            const char *fit_path, cf_error *err);
+void report_data_free(report_data *d);
+
+/* The pictures of image k: DIR/images/NNN_{photo,render,residual}.png;
+ * names receives the three file names relative to DIR (64 bytes each). */
+cf_status report_image(const report_data *d, size_t k, const char *dir, char names[3][64],
+                       cf_error *err);
+
+/* The heat map's colour of a residual r (σ units): blue at
+ * −CF_REPORT_SIGMA_RANGE, white at 0, red at +CF_REPORT_SIGMA_RANGE
+ * (linear RGB; beyond the range, the range's ends). */
+void report_residual_colour(double r, float rgb[3]);
+
+/* The plots, into DIR/plots/; names (NULL-terminated pairs of key and
+ * relative path) for the page and report.json. */
+enum { REPORT_PLOT_COUNT = 6 };
+typedef struct report_plot {
+  const char *key, *title, *file;
+} report_plot;
+extern const report_plot report_plots[REPORT_PLOT_COUNT];
+cf_status report_write_plots(const report_data *d, const char *dir, cf_error *err);
+
+/* report.json and index.html. image_files: 3 names per image. */
+cf_status report_write_json(const report_data *d, const char *dir, const char *fit_path,
+                            const char *version, char (*image_files)[3][64], cf_error *err);
+cf_status report_write_html(const report_data *d, const char *dir, const char *fit_path,
+                            const char *version, char (*image_files)[3][64], cf_error *err);
+
+#endif /* CLAYFIT_REPORT_INTERNAL_H */

@@ -1,0 +1,66 @@
+# Reading fit.json back, and the material presets (clayfit export).
+clayfit_c_test(test_fit_read SOURCES export/test_fit_read.c LIBS clayfit_fit_test_support
+               LABELS "fit;export")
+
+# One fit.json per model (tests/export/make_fits.py: schema-valid, written
+# without fitting), each exported to every format and the file validated by
+# an independent tool (tests/export/check_export.py): the json preset
+# against data_schema/preset.schema.json and evaluated back (clayfit eval
+# --preset equals the fit's parameters to the last bit), MaterialX and
+# Mitsuba by xmllint and the standard definitions' names, glTF by the
+# Khronos validator (npm gltf-validator), the Blender script by py_compile.
+# A missing tool skips (exit 77).
+set(EXPORT_DIR ${CMAKE_CURRENT_BINARY_DIR}/export)
+set(EXPORT_CHECK ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/export/check_export.py)
+set(EXPORT_NODE_MODULES ${PROJECT_SOURCE_DIR}/build/tools/node_modules)
+add_test(NAME cli_export_fixtures
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/export/make_fits.py ${CLAYFIT}
+                 ${EXPORT_DIR})
+set_tests_properties(cli_export_fixtures PROPERTIES LABELS "cli;export" FIXTURES_SETUP export_fits)
+add_test(NAME cli_export_fixtures_valid
+         COMMAND ${CLAYFIT_PYTHON} -c
+         "import json, sys, jsonschema; s = json.load(open(sys.argv[1])); [jsonschema.Draft202012Validator(s).validate(json.load(open(f'{sys.argv[2]}/{m}/fit.json'))) for m in ('M0', 'M1', 'M2', 'M3', 'M4')]"
+         ${SCHEMA}/fit.schema.json ${EXPORT_DIR})
+set_tests_properties(cli_export_fixtures_valid PROPERTIES LABELS "cli;export"
+                     FIXTURES_REQUIRED export_fits)
+foreach(model M0 M1 M2 M3 M4)
+  foreach(format json mtlx mtlx-openpbr gltf blender mitsuba)
+    add_test(NAME cli_export_${model}_${format}
+             COMMAND ${EXPORT_CHECK} ${CLAYFIT} ${EXPORT_DIR}/${model}/fit.json ${format}
+                     ${EXPORT_DIR}/${model}/preset.${format} --schema ${SCHEMA}
+                     --node-modules ${EXPORT_NODE_MODULES})
+    set_tests_properties(cli_export_${model}_${format} PROPERTIES LABELS "cli;export"
+                         FIXTURES_REQUIRED export_fits SKIP_RETURN_CODE 77)
+  endforeach()
+endforeach()
+# A real fit (clayfit fit's own fit.json of the small M2 capture): its json
+# preset evaluates as the fit.
+add_test(NAME cli_export_real_fit_json
+         COMMAND ${EXPORT_CHECK} ${CLAYFIT} ${FIT_SMALL}/hold/fit.json json
+                 ${FIT_SMALL}/hold/preset.json --schema ${SCHEMA})
+set_tests_properties(cli_fit_forced_hold PROPERTIES FIXTURES_SETUP fit_small_hold)
+set_tests_properties(cli_export_real_fit_json PROPERTIES LABELS "cli;export;fit"
+                     FIXTURES_REQUIRED "fit_small;fit_small_hold")
+# The warning of a value a target cannot take (M4's oil film, F0 0.06,
+# above glTF's fixed clear-coat F0 0.04).
+clayfit_cli_test(export_range_warning --stderr "warning: gltf: clearcoatFactor = film_f0 / 0.04 = 1.5 is outside glTF's range \\[0, 1\\]: written as 1"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/M4/fit.json --format gltf -o ${EXPORT_DIR}/M4/warned.gltf)
+set_tests_properties(cli_export_range_warning PROPERTIES LABELS "cli;export" FIXTURES_REQUIRED export_fits)
+# bad input: exit 2 with the reason
+clayfit_cli_test(error_export_missing_fit --exit 2 --stderr "no-such-fit.json"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/no-such-fit.json --format json -o ${EXPORT_DIR}/never.json)
+clayfit_cli_test(error_export_wrong_type --exit 2
+  --stderr "bad/fit.json: params.roughness.value: expected a number, got a string"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/bad/fit.json --format gltf -o ${EXPORT_DIR}/never.gltf)
+clayfit_cli_test(error_export_unknown_format --exit 2
+  --stderr "unknown format 'obj' \\(the formats are json, mtlx, mtlx-openpbr, gltf, blender, mitsuba\\)"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/M2/fit.json --format obj -o ${EXPORT_DIR}/never.obj)
+clayfit_cli_test(error_export_no_format --exit 2 --stderr "expected FIT.json --format F -o PATH"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/M2/fit.json -o ${EXPORT_DIR}/never.json)
+clayfit_cli_test(error_eval_bad_preset --exit 2
+  --stderr "M2/fit.json: \\(top level\\): unknown key .clayfit_fit."
+  -- ${CLAYFIT} eval --preset ${EXPORT_DIR}/M2/fit.json ${UP})
+foreach(name error_export_missing_fit error_export_wrong_type error_export_unknown_format
+        error_export_no_format error_eval_bad_preset)
+  set_tests_properties(cli_${name} PROPERTIES LABELS "cli;export" FIXTURES_REQUIRED export_fits)
+endforeach()

@@ -1,0 +1,228 @@
+/* cf_fit_file_read: a fit written by cf_fit_write_json and read back gives
+ * the same values (M4 with per-channel statuses, a null standard deviation
+ * at a bound, an unconstrained slot; M0 with derived null); a broken
+ * fit.json is refused with the file and the JSON path in the message. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clayfit/fit.h"
+#include "fit/fit_json.h"
+#include "fit/fit_support.h"
+#include "support/check.h"
+
+CHECK_MAIN_STATE;
+
+static int same(double a, double b) {
+  return a == b || (isnan(a) && isnan(b));
+}
+
+/* A hand-made result of `model` over the capture's images. */
+static void make_result(cf_fit_result *r, cf_model_id model, size_t images) {
+  memset(r, 0, sizeof *r);
+  const cf_model_info *m = cf_model_info_get(model);
+  r->model = model;
+  cf_model_default_params(model, r->params);
+  for (int k = 0; k < m->dim; ++k) {
+    double step = 0.001 * (k + 1) / 3.0; /* not round numbers, in range */
+    r->params[k] += r->params[k] + step <= 1.0 ? step : -step;
+    r->sd[k] = 1e-3 / (k + 1);
+    r->status[k] = CF_PARAM_FITTED;
+  }
+  if (model == CF_MODEL_CLAY) {
+    r->params[CF_CLAY_OPTICAL_DEPTH + 2] = 0.0; /* at its lower bound */
+    r->sd[CF_CLAY_OPTICAL_DEPTH + 2] = NAN;
+    r->status[CF_CLAY_OPTICAL_DEPTH + 2] = CF_PARAM_AT_BOUND;
+    r->params[CF_CLAY_BASE_F0] = 0.004;
+    r->sd[CF_CLAY_BASE_F0] = 0.0;
+    r->status[CF_CLAY_BASE_F0] = CF_PARAM_UNCONSTRAINED;
+    r->sd[CF_CLAY_FILM_F0] = 0.0;
+    r->status[CF_CLAY_FILM_F0] = CF_PARAM_HELD_FOR_SCALE;
+  }
+  for (int k = 0; k < m->dim; ++k)
+    if (r->status[k] == CF_PARAM_FITTED) r->free_slots[r->free_count++] = k;
+  for (int a = 0; a < r->free_count; ++a)
+    for (int b = 0; b < r->free_count; ++b)
+      r->correlation[a * r->free_count + b] = a == b ? 1.0 : 0.01 * (a - b);
+  r->scale = 1.25;
+  r->scale_sd = 0.003;
+  r->scale_fitted = 1;
+  r->response = 1.5;
+  r->response_sd = 0.002;
+  r->response_fitted = 1;
+  r->images = images;
+  r->exposures = calloc(images, sizeof(double));
+  r->image_rmse = calloc(images, sizeof(double));
+  r->image_relative_rmse = calloc(images, sizeof(double));
+  for (size_t k = 0; k < images; ++k) {
+    r->exposures[k] = 1.0 + 0.1 * (double)k;
+    r->image_rmse[k] = 0.01 / (double)(k + 1);
+    r->image_relative_rmse[k] = 0.02 / (double)(k + 1);
+  }
+  r->sigma = 0.0123;
+  r->residuals = 3000;
+  r->censored = 7;
+  r->rejected = 11;
+  r->rmse = 0.0042;
+  r->relative_rmse = 0.031;
+  r->core_residuals = 90;
+  r->core_rmse = 0.1;
+  r->core_relative_rmse = 0.2;
+  r->rest_rmse = 0.003;
+  r->rest_relative_rmse = 0.02;
+  r->cost = 123.5;
+  r->iterations = 17;
+  r->solves = 2;
+  snprintf(r->termination, sizeof r->termination, "CONVERGENCE");
+  r->starts = 2;
+  for (int i = 0; i < 2; ++i) {
+    memcpy(r->start[i].start, r->params, sizeof r->params);
+    memcpy(r->start[i].end, r->params, sizeof r->params);
+    r->start[i].start[0] = 0.1 * (i + 1);
+    r->start[i].cost = 10.0 + i;
+    r->start[i].iterations = 5 + i;
+  }
+  r->best_start = 1;
+  r->footprint_observations = 40;
+  r->footprint_samples = 640;
+  r->footprint_max = 4;
+  r->warning_count = 1;
+  snprintf(r->warnings[0], sizeof r->warnings[0], "a warning");
+}
+
+static void round_trip(const cf_capture *capture, const char *dir, cf_model_id model) {
+  const cf_model_info *m = cf_model_info_get(model);
+  cf_fit_result r;
+  make_result(&r, model, cf_capture_image_count(capture));
+  char path[600];
+  snprintf(path, sizeof path, "%s/%s.fit.json", dir, m->code);
+  cf_fit_report rep = {
+      capture, "no/such/capture.json", &r, NULL, "9.9.9", CF_LOSS_CAUCHY, 2.5, NAN, 1.0, 2.0, 3,
+      0.004};
+  cf_error err = {0};
+  CHECK(cf_fit_write_json(path, &rep, &err) == CF_OK, "%s", err.message);
+  cf_fit_file f;
+  cf_status s = cf_fit_file_read(path, &f, &err);
+  CHECK(s == CF_OK, "%s: %s", m->code, err.message);
+  if (s != CF_OK) {
+    cf_fit_result_free(&r);
+    return;
+  }
+  const cf_fit_result *g = &f.result;
+  CHECK(g->model == model, "%s: model %d", m->code, (int)g->model);
+  for (int k = 0; k < m->dim; ++k) {
+    CHECK(g->params[k] == r.params[k], "%s: params[%d] %.17g != %.17g", m->code, k, g->params[k],
+          r.params[k]);
+    CHECK(same(g->sd[k], r.sd[k]), "%s: sd[%d] %.17g != %.17g", m->code, k, g->sd[k], r.sd[k]);
+    CHECK(g->status[k] == r.status[k], "%s: status[%d] %d != %d", m->code, k, (int)g->status[k],
+          (int)r.status[k]);
+  }
+  CHECK(g->free_count == r.free_count, "%s: free_count", m->code);
+  for (int a = 0; a < r.free_count * r.free_count; ++a)
+    CHECK(g->correlation[a] == r.correlation[a], "%s: correlation[%d]", m->code, a);
+  for (int a = 0; a < r.free_count; ++a) CHECK(g->free_slots[a] == r.free_slots[a], "free_slots");
+  CHECK(g->scale == r.scale && g->scale_sd == r.scale_sd && g->scale_fitted == 1, "scale");
+  CHECK(g->response == r.response && g->response_sd == r.response_sd && g->response_fitted == 1,
+        "response");
+  CHECK(g->images == r.images, "images %zu", g->images);
+  for (size_t k = 0; k < r.images && k < g->images; ++k)
+    CHECK(g->exposures[k] == r.exposures[k] && g->image_rmse[k] == r.image_rmse[k] &&
+              g->image_relative_rmse[k] == r.image_relative_rmse[k],
+          "image %zu", k);
+  CHECK(g->sigma == r.sigma && g->rmse == r.rmse && g->relative_rmse == r.relative_rmse, "rmse");
+  CHECK(g->residuals == 3000 && g->censored == 7 && g->rejected == 11, "counts");
+  CHECK(g->core_residuals == 90 && g->core_rmse == 0.1 && g->rest_rmse == 0.003, "cores");
+  CHECK(g->cost == 123.5 && g->iterations == 17 && g->solves == 2, "solver");
+  CHECK(strcmp(g->termination, "CONVERGENCE") == 0, "termination");
+  CHECK(g->starts == 2 && g->best_start == 1, "starts");
+  CHECK(g->start[0].start[0] == 0.1 && g->start[1].cost == 11.0, "start values");
+  CHECK(g->warning_count == 1 && strcmp(g->warnings[0], "a warning") == 0, "warnings");
+  CHECK(g->footprint_observations == 40 && g->footprint_samples == 640 && g->footprint_max == 4,
+        "footprint counts");
+  CHECK(f.footprint == 3 && f.footprint_tolerance == 0.004, "footprint %d", f.footprint);
+  CHECK(strcmp(f.clayfit_version, "9.9.9") == 0, "version '%s'", f.clayfit_version);
+  CHECK(strlen(f.created) == 20, "created '%s'", f.created);
+  char expected[700];
+  snprintf(expected, sizeof expected, "%s/no/such/capture.json", dir);
+  CHECK(strcmp(f.capture_path, expected) == 0, "capture_path '%s'", f.capture_path);
+  CHECK(strcmp(f.radiometry, "absolute") == 0, "radiometry '%s'", f.radiometry);
+  CHECK(strcmp(f.loss, "cauchy") == 0 && f.loss_scale == 2.5, "loss '%s'", f.loss);
+  if (model == CF_MODEL_CLAY) {
+    const double *tau = r.params + CF_CLAY_OPTICAL_DEPTH;
+    double d = (tau[0] + tau[1] + tau[2]) / 3.0 / 0.8;
+    CHECK(fabs(f.density - d) <= 1e-15 * d, "density %.17g", f.density);
+    CHECK(fabs(f.absorption[0] - tau[0] / d) < 1e-14 && f.absorption[2] == 0.0, "absorption");
+    CHECK(strstr(f.density_convention, "0.8") != NULL, "convention");
+  } else {
+    CHECK(isnan(f.density) && isnan(f.absorption[0]), "derived null");
+  }
+  cf_fit_file_free(&f);
+  CHECK(f.result.exposures == NULL, "freed");
+  cf_fit_result_free(&r);
+}
+
+/* Replace `from` by `to` in the file, write it to `out`. */
+static int edit(const char *in, const char *out, const char *from, const char *to) {
+  FILE *file = fopen(in, "rb");
+  if (!file) return 0;
+  static char text[1 << 20];
+  size_t n = fread(text, 1, sizeof text - 1, file);
+  fclose(file);
+  text[n] = '\0';
+  char *at = strstr(text, from);
+  if (!at) return 0;
+  file = fopen(out, "wb");
+  if (!file) return 0;
+  fwrite(text, 1, (size_t)(at - text), file);
+  fputs(to, file);
+  fputs(at + strlen(from), file);
+  fclose(file);
+  return 1;
+}
+
+static void refused(const char *dir, const char *from, const char *to, const char *message) {
+  char in[600], out[600];
+  snprintf(in, sizeof in, "%s/M4.fit.json", dir);
+  snprintf(out, sizeof out, "%s/bad.fit.json", dir);
+  CHECK(edit(in, out, from, to), "could not edit '%s'", from);
+  cf_fit_file f;
+  cf_error err = {0};
+  cf_status s = cf_fit_file_read(out, &f, &err);
+  CHECK(s != CF_OK, "'%s' -> '%s' accepted", from, to);
+  CHECK(strstr(err.message, message) != NULL && strstr(err.message, "bad.fit.json") != NULL,
+        "'%s' -> '%s': message '%s' lacks '%s'", from, to, err.message, message);
+}
+
+int main(void) {
+  char dir[64];
+  if (!fit_test_make_dir(dir, sizeof dir)) return 1;
+  cf_synth_options o;
+  double params[CF_MAX_DIM];
+  cf_model_default_params(CF_MODEL_LAMBERT, params);
+  fit_test_synth_options(&o, CF_MODEL_LAMBERT, params);
+  o.images = 2;
+  o.width = 80;
+  o.height = 60;
+  o.focal_px = 100.0;
+  cf_capture *capture = fit_test_capture(dir, "capture", &o);
+  if (!capture) return check_finish("test_fit_read");
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) round_trip(capture, dir, (cf_model_id)m);
+  cf_capture_free(capture);
+
+  refused(dir, "\"clayfit_fit\": 1", "\"clayfit_fit\": \"1\"", "clayfit_fit: expected an integer");
+  refused(dir, "\"scale\": {", "\"scale\": {\"bogus\": 1, ", "scale: unknown key 'bogus'");
+  refused(dir, "\"code\": \"M4\"", "\"code\": \"M7\"", "model.code: 'M7' is not one of");
+  refused(dir, "\"status\": \"held: sets the absolute scale\"", "\"status\": \"guessed\"",
+          "params.film_f0.status: 'guessed' is not a parameter status");
+  refused(dir, "\"unit\": \"rad\"", "\"unit\": \"deg\"", "params.diffuse_roughness.unit");
+  refused(dir, "\"exposure\": 1.0", "\"exposure\": -1", "residuals.per_image[0].exposure");
+  refused(dir, "\"value\": 1.25", "\"value\": \"x\"", "scale.value: expected a number");
+  cf_fit_file f;
+  cf_error err = {0};
+  CHECK(cf_fit_file_read("/no/such/fit.json", &f, &err) == CF_ENOTFOUND, "missing file: %s",
+        err.message);
+  fit_test_remove_dir(dir);
+  return check_finish("test_fit_read");
+}

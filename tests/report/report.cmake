@@ -1,0 +1,46 @@
+# clayfit report (issue 5): the page, report.json, every picture and plot,
+# and the page in a real browser.
+
+# on the small synthetic M2 fit of fit.cmake (cli_fit_auto's fit.json)
+set_tests_properties(cli_fit_auto PROPERTIES FIXTURES_SETUP fit_small_auto)
+add_test(NAME cli_report_synth
+         COMMAND ${CLAYFIT} --quiet report ${FIT_SMALL}/auto/fit.json -o ${FIT_SMALL}/report)
+set_tests_properties(cli_report_synth PROPERTIES LABELS "cli;report"
+                     FIXTURES_REQUIRED "fit_small;fit_small_auto" FIXTURES_SETUP report_synth)
+add_test(NAME report_synth_files
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_report.py
+                 ${FIT_SMALL}/report ${SCHEMA}/report.schema.json 8)
+set_tests_properties(report_synth_files PROPERTIES LABELS "report" FIXTURES_REQUIRED report_synth)
+add_test(NAME report_synth_browser
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_report_browser.py
+                 ${FIT_SMALL}/report ${FIT_SMALL}/report_screenshot.png)
+set_tests_properties(report_synth_browser PROPERTIES LABELS "report" FIXTURES_REQUIRED report_synth
+                     SKIP_RETURN_CODE 77 TIMEOUT 400)
+
+# errors: exit 2 with the reason
+clayfit_cli_test(error_report_no_fit --exit 2 --stderr "no-such-fit.json"
+  -- ${CLAYFIT} --quiet report ${FIT_SMALL}/no-such-fit.json -o ${FIT_SMALL}/never)
+clayfit_cli_test(error_report_no_output --exit 2 --stderr "expected one fit.json and -o DIR"
+  -- ${CLAYFIT} --quiet report ${FIT_SMALL}/auto/fit.json)
+set(REPORT_OTHER ${CMAKE_CURRENT_BINARY_DIR}/report_other_capture)
+add_test(NAME cli_report_other_synth COMMAND ${CLAYFIT} --quiet synth -o ${REPORT_OTHER} --model M0
+         --images 4 --size 100x75 --format exr --no-noise --supersample 1)
+set_tests_properties(cli_report_other_synth PROPERTIES LABELS "cli;report"
+                     FIXTURES_SETUP report_other)
+clayfit_cli_test(error_report_other_capture --exit 2
+  --stderr "the fit has 8 images and the capture 4: not this capture's fit"
+  -- ${CLAYFIT} --quiet report ${FIT_SMALL}/auto/fit.json -o ${FIT_SMALL}/never
+     --capture ${REPORT_OTHER}/capture.json)
+set_tests_properties(cli_error_report_no_fit cli_error_report_no_output
+                     cli_error_report_other_capture PROPERTIES LABELS "cli;report")
+set_tests_properties(cli_error_report_other_capture PROPERTIES
+                     FIXTURES_REQUIRED "fit_small;fit_small_auto;report_other")
+
+# The real DiLiGenT ball (skipped without ../shared/data): an M2 fit at
+# pixel centres and its report of 96 images.
+add_test(NAME report_diligent
+         COMMAND ${CMAKE_COMMAND} -E env CLAYFIT=${CLAYFIT} PYTHON=${CLAYFIT_PYTHON}
+                 bash ${CMAKE_CURRENT_SOURCE_DIR}/report/report_diligent.sh
+                 ${PROJECT_SOURCE_DIR} ${CLAYFIT_SHARED_DATA} ${CMAKE_CURRENT_BINARY_DIR}/report_diligent
+                 ${SCHEMA}/report.schema.json)
+set_tests_properties(report_diligent PROPERTIES LABELS "report;slow" SKIP_RETURN_CODE 77 TIMEOUT 900)
