@@ -30,6 +30,23 @@ extern "C" {
 
 typedef enum cf_loss { CF_LOSS_NONE, CF_LOSS_HUBER, CF_LOSS_CAUCHY } cf_loss;
 
+/* How a pixel budget draws the observations of the fit on every
+ * observation (cf_fit_options.budget); each drawn observation is weighed
+ * by the inverse of its chance to be drawn (Horvitz-Thompson), so that the
+ * sample's cost estimates the population's. */
+typedef enum cf_sampling {
+  CF_SAMPLING_UNIFORM,    /* every k-th observation */
+  CF_SAMPLING_STRATIFIED, /* by half-angle: the 1/16 of the observations
+                             nearest a highlight get a quarter of the
+                             budget, the rest three quarters */
+  CF_SAMPLING_IMPORTANCE, /* the highlights (the 1/16 nearest) and the
+                             silhouette region (n·v < 0.3) kept whole up to
+                             half the budget, the rest uniform */
+  CF_SAMPLING_COUNT
+} cf_sampling;
+
+const char *cf_sampling_name(cf_sampling sampling);
+
 /* Why a parameter has the value it has. */
 typedef enum cf_param_status {
   CF_PARAM_FITTED,          /* estimated from the capture */
@@ -74,6 +91,11 @@ typedef struct cf_fit_options {
    * renders) */
   int footprint;
   double footprint_tolerance; /* default 2e-3 */
+  /* a pixel budget: the fit on every observation uses at most `budget` of
+   * them drawn by `sampling` (0, the default: all); the starts and the
+   * model choice use their own subsamples anyway */
+  size_t budget;
+  cf_sampling sampling;
   double density;         /* the film's known thickness for the report of
                              density and absorption; NaN: the convention
                              (mean absorption 0.8) */

@@ -15,6 +15,7 @@ typedef struct cli_context {
 int cmd_eval(int argc, char **argv, cli_context *ctx);
 int cmd_models(int argc, char **argv, cli_context *ctx);
 int cmd_bench(int argc, char **argv, cli_context *ctx);
+int cmd_bench_fit(int argc, char **argv, cli_context *ctx); /* clayfit bench fit */
 int cmd_synth(int argc, char **argv, cli_context *ctx);
 int cmd_inspect(int argc, char **argv, cli_context *ctx);
 int cmd_fit(int argc, char **argv, cli_context *ctx);

@@ -109,6 +109,7 @@ static void bench_usage(FILE *out) {
 }
 
 int cmd_bench(int argc, char **argv, cli_context *ctx) {
+  if (argc > 1 && strcmp(argv[1], "fit") == 0) return cmd_bench_fit(argc - 1, argv + 1, ctx);
   static const struct option options[] = {{"count", required_argument, NULL, 'c'},
                                           {"min-time", required_argument, NULL, 't'},
                                           {"json", no_argument, NULL, 'j'},
@@ -140,7 +141,7 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
     }
   }
   if (optind >= argc || strcmp(argv[optind], "eval") != 0 || optind + 1 != argc) {
-    cli_report("bench", "expected 'bench eval' (the fit benchmark comes with the fitter)");
+    cli_report("bench", "expected 'bench eval' or 'bench fit'");
     return CLI_EXIT_USAGE;
   }
   if (!(min_time >= 0.0 && min_time <= 600.0)) {

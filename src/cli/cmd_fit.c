@@ -21,6 +21,7 @@ static void fit_usage(FILE *out) {
           "                   [--free name ...] [--loss huber|cauchy|none] [--loss-scale K]\n"
           "                   [--fit-exposures] [--no-multistart] [--density D]\n"
           "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
+          "                   [--budget N] [--sampling uniform|stratified|importance]\n"
           "                   [--max-iterations N] [--threads N]\n\n"
           "Fits the model to the capture's observations and writes OUTDIR/fit.json\n"
           "(data_schema/fit.schema.json): parameters with units, standard deviations and\n"
@@ -46,6 +47,10 @@ static void fit_usage(FILE *out) {
           "                      every pixel S x S (as synth --supersample S renders)\n"
           "  --footprint-tolerance T  auto's relative error of a lobe over a pixel\n"
           "                      (default 0.002)\n"
+          "  --budget N          fit on at most N observations (default: all), drawn by\n"
+          "  --sampling S        uniform, stratified by half-angle (default), or importance\n"
+          "                      (the highlights and the silhouette kept); each weighed by\n"
+          "                      the inverse of its chance (clayfit bench fit: the curve)\n"
           "  --max-iterations N  per solve (default 100)\n"
           "  --threads N         solver threads (default 2)\n");
 }
@@ -90,6 +95,8 @@ typedef struct fit_settings {
   int fit_exposures, multistart, max_iterations, threads;
   int footprint;
   double footprint_tolerance;
+  size_t budget;
+  cf_sampling sampling;
 } fit_settings;
 
 static cf_status model_options(cf_model_id model, const fit_settings *set, const char **holds,
@@ -105,6 +112,8 @@ static cf_status model_options(cf_model_id model, const fit_settings *set, const
   o->density = set->density;
   o->footprint = set->footprint;
   o->footprint_tolerance = set->footprint_tolerance;
+  o->budget = set->budget;
+  o->sampling = set->sampling;
   return apply_holds(o, holds, hold_count, frees, free_count, known, err);
 }
 
@@ -196,11 +205,13 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
                                           {"help", no_argument, NULL, 'h'},
                                           {"footprint", required_argument, NULL, 'f'},
                                           {"footprint-tolerance", required_argument, NULL, 'T'},
+                                          {"budget", required_argument, NULL, 'B'},
+                                          {"sampling", required_argument, NULL, 'S'},
                                           {0}};
   const char *out_dir = NULL, *model_text = "auto";
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
   int hold_count = 0, free_count = 0;
-  fit_settings set = {CF_LOSS_HUBER, 3.0, NAN, 0, 1, 100, 2, 0, 2e-3};
+  fit_settings set = {CF_LOSS_HUBER, 3.0, NAN, 0, 1, 100, 2, 0, 2e-3, 0, CF_SAMPLING_STRATIFIED};
   long max_iterations = 100, threads = 2;
   cf_error err = {0};
   cf_status s = CF_OK;
@@ -268,6 +279,22 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
           set.footprint = (int)samples;
         }
         break;
+      case 'B': {
+        long budget = 0;
+        s = cli_parse_count(optarg, "--budget", 100, 2000000000L, &budget, &err);
+        set.budget = (size_t)budget;
+        break;
+      }
+      case 'S': {
+        int found = 0;
+        for (int k = 0; k < CF_SAMPLING_COUNT; ++k)
+          if (strcmp(optarg, cf_sampling_name((cf_sampling)k)) == 0)
+            set.sampling = (cf_sampling)k, found = 1;
+        if (!found)
+          s = cf_error_set(&err, CF_EINVAL,
+                           "--sampling: '%s' is not uniform, stratified or importance", optarg);
+        break;
+      }
       case 'T':
         s = cli_parse_number(optarg, "--footprint-tolerance", &set.footprint_tolerance, &err);
         if (s == CF_OK && !(set.footprint_tolerance > 0.0 && set.footprint_tolerance < 1.0))

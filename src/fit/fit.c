@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "core/clock.h"
+#include "fit_budget.h"
 #include "fit_footprint.h"
 #include "fit_hidden_base.h"
 #include "fit_multistart.h"
@@ -274,6 +275,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   fit_problem p;
   s = fit_problem_init(&p, capture, o->model, population->index, population->count, err);
   if (s != CF_OK) return s;
+  if (population->weight) s = fit_problem_set_sample_weights(&p, population->weight, err);
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
   /* an unknown tone curve: the response exponent is fitted from here on
@@ -394,8 +396,18 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
   memset(r, 0, sizeof *r);
   fit_population population;
   uint32_t *index;
+  fit_sample budget = {0};
   cf_status s = fit_population_of_images(capture, o->use_image, &population, &index, err);
+  if (s == CF_OK && o->budget > 0 && o->budget < population.count) { /* a pixel budget */
+    if ((unsigned)o->sampling >= CF_SAMPLING_COUNT)
+      s = cf_error_set(err, CF_EINVAL, "invalid sampling %d", (int)o->sampling);
+    if (s == CF_OK)
+      s = fit_budget_draw(cf_capture_observations(capture), &population, o->budget, o->sampling,
+                          &budget, err);
+    if (s == CF_OK) population = (fit_population){budget.index, budget.count, budget.weight};
+  }
   if (s == CF_OK) s = fit_run_population(capture, &population, o, r, err);
+  fit_sample_free(&budget);
   free(index);
   return s;
 }

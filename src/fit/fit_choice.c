@@ -183,7 +183,8 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   choice_split split;
   cf_status s = split_sample(capture, options[0].use_image, exposures, &split, choice->heldout,
                              sizeof choice->heldout, err);
-  fit_population train = {split.train, split.train_count}, test = {split.test, split.test_count};
+  fit_population train = {split.train, split.train_count, NULL},
+                 test = {split.test, split.test_count, NULL};
   choice->train_observations = split.train_count;
   choice->heldout_observations = split.test_count;
   if (s == CF_OK) {

@@ -116,7 +116,11 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->weight = malloc(3 * pairs * sizeof *p->weight);
   p->inv_sigma = malloc(3 * p->count * sizeof *p->inv_sigma);
   p->log_exposures = calloc(p->images, sizeof *p->log_exposures);
-  if (!p->geometry || !p->weight || !p->inv_sigma || !p->log_exposures) {
+  p->y = malloc(3 * (p->count ? p->count : 1) * sizeof *p->y);
+  p->image = malloc((p->count ? p->count : 1) * sizeof *p->image);
+  p->flags = malloc(p->count ? p->count : 1);
+  if (!p->geometry || !p->weight || !p->inv_sigma || !p->log_exposures || !p->y || !p->image ||
+      !p->flags) {
     fit_problem_release(p);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", p->count);
   }
@@ -124,6 +128,9 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   const cf_observations *o = p->obs;
   for (size_t i = 0; i < p->count; ++i) {
     size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
+    for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = o->rgb[3 * k + (size_t)c];
+    p->image[i] = o->image[k];
+    p->flags[i] = o->flags[k];
     fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * slot,
                  o->irradiance + 3 * slot, 1.0, p->geometry + pair, p->weight + 3 * pair);
   }
@@ -150,6 +157,9 @@ void fit_problem_release(fit_problem *p) {
   free(p->sample_root);
   free(p->slot_begin);
   free(p->samples);
+  free(p->y);
+  free(p->image);
+  free(p->flags);
   memset(p, 0, sizeof *p);
 }
 
@@ -187,8 +197,7 @@ void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sig
   /* one σ for all, or the measurements, turned in place into the noise
    * model's 1/σ */
   for (size_t i = 0; i < 3 * p->count; ++i)
-    p->inv_sigma[i] =
-        noise ? p->obs->rgb[3 * observation(p, i / 3) + i % 3] : 1.0 / sqrt(sigma * sigma);
+    p->inv_sigma[i] = noise ? p->y[i] : 1.0 / sqrt(sigma * sigma);
   if (noise) noise_inv_sigma(p, read, shot, p->inv_sigma);
 }
 
@@ -396,9 +405,9 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
   }
   double total = 0.0; /* Σ w ρ */
   for (size_t i = 0; ok && i < n; ++i) {
-    size_t row = begin + i, k = observation(p, row);
-    const double *y = p->obs->rgb + 3 * k;
-    uint32_t image = p->obs->image[k];
+    size_t row = begin + i;
+    const double *y = p->y + 3 * row;
+    uint32_t image = p->image[row];
     double gain = exp(log_scale + log_e[image]);
     size_t first;
     size_t slots = fit_problem_slot_range(p, row, &first);
@@ -482,13 +491,11 @@ int fit_problem_block_columns(void *user, size_t block, int *columns) {
   size_t begin = block * p->block_size;
   size_t end = p->count - begin < p->block_size ? p->count : begin + p->block_size;
   int has_last = 0, k = 0;
-  for (size_t i = begin; i < end && !has_last; ++i)
-    has_last = p->obs->image[observation(p, i)] == p->last_image;
+  for (size_t i = begin; i < end && !has_last; ++i) has_last = p->image[i] == p->last_image;
   for (int u = 0; u < p->num_unknowns; ++u) {
     const fit_unknown *unk = &p->unknowns[u];
     int used = unk->kind != FIT_LOG_EXPOSURE || has_last;
-    for (size_t i = begin; i < end && !used; ++i)
-      used = p->obs->image[observation(p, i)] == (uint32_t)unk->slot;
+    for (size_t i = begin; i < end && !used; ++i) used = p->image[i] == (uint32_t)unk->slot;
     if (used) columns[k++] = u;
   }
   return k;
@@ -500,9 +507,9 @@ cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *
   if (!f) return cf_error_set(err, CF_ENOMEM, "out of memory");
   cf_eval_batch(p->model, p->params, p->slots, p->geometry, f, NULL);
   for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i), first;
+    size_t first;
     size_t slots = fit_problem_slot_range(p, i, &first);
-    double gain = exp(p->log_scale + p->log_exposures[p->obs->image[k]]);
+    double gain = exp(p->log_scale + p->log_exposures[p->image[i]]);
     for (int c = 0; c < 3; ++c) {
       double value = 0.0;
       for (size_t pair = first; pair < first + slots; ++pair)
@@ -510,7 +517,7 @@ cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *
       double linear = gain * value;
       prediction[3 * i + (size_t)c] =
           p->response_on ? (linear > 0.0 ? pow(linear, p->response) : 0.0) : linear;
-      measured[3 * i + (size_t)c] = p->obs->rgb[3 * k + (size_t)c];
+      measured[3 * i + (size_t)c] = p->y[3 * i + (size_t)c];
     }
   }
   free(f);
@@ -541,6 +548,7 @@ cf_status fit_population_of_images(const cf_capture *capture, const unsigned cha
   *index = NULL;
   population->index = NULL;
   population->count = obs->count;
+  population->weight = NULL;
   if (!use_image) return CF_OK;
   *index = malloc((obs->count ? obs->count : 1) * sizeof **index);
   if (!*index) return cf_error_set(err, CF_ENOMEM, "out of memory");

@@ -192,7 +192,7 @@ cf_status cf_fit_predict(const cf_capture *capture, const cf_fit_result *fit,
                          const cf_fit_options *options, double *prediction, double *sigma,
                          cf_error *err) {
   fit_problem p;
-  fit_population all = {NULL, cf_capture_observations(capture)->count};
+  fit_population all = {NULL, cf_capture_observations(capture)->count, NULL};
   cf_status s =
       problem_at_fit(&p, capture, &all, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options, err);
   if (s != CF_OK) return s;
