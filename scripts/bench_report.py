@@ -23,7 +23,7 @@ def cpu():
 def plot(runs, path):
     """Relative RMSE (all pixels) against wall time, log-log, one colour
     per capture, the Pareto front joined."""
-    w, h, left, top, pw, ph = 720, 460, 80, 40, 600, 360
+    w, h, left, top, pw, ph = 720, 470, 80, 50, 600, 360
     ok = [r for r in runs if r["seconds"] > 0 and r["relative_rmse"] > 0]
     t0, t1 = min(r["seconds"] for r in ok) / 1.3, max(r["seconds"] for r in ok) * 1.3
     e0, e1 = min(r["relative_rmse"] for r in ok) / 1.05, max(r["relative_rmse"] for r in ok) * 1.05
@@ -61,7 +61,7 @@ def plot(runs, path):
             else:
                 out.append(f'<polygon points="{x:.1f},{y-6:.1f} {x+6:.1f},{y+5:.1f} {x-6:.1f},{y+5:.1f}" fill="{colour}"/>')
         out.append(f'<text x="{left+pw-10}" y="{top+18+16*ci}" text-anchor="end" fill="{colour}">{cap}</text>')
-    out.append(f'<text x="{left+10}" y="{top+18}">circle: all observations; square: uniform; diamond: stratified; triangle: importance; line: Pareto front</text>')
+    out.append(f'<text x="{left}" y="{top-6}" font-size="11">circle: all observations; square: uniform; diamond: stratified; triangle: importance; line: Pareto front</text>')
     out.append("</svg>")
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
