@@ -47,6 +47,12 @@ typedef struct cf_observations {
   float *pixel;
 } cf_observations;
 
+/* How near observation i's half vector comes to its normal, for any light
+ * that reaches it: max_j n·normalize(l_j + v) over the lights with some
+ * irradiance and n·l_j > 0; −1 when no light reaches it. (The cosine of
+ * the half-angle: where the highlights are.) */
+double cf_observation_specularity(const cf_observations *obs, size_t i);
+
 /* One image's part in the capture. */
 typedef struct cf_capture_image {
   const char *name; /* as the capture file names it */

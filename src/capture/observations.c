@@ -77,6 +77,20 @@ int cf_capture_footprint_at(const cf_capture *capture, size_t i, double du, doub
   return 1;
 }
 
+double cf_observation_specularity(const cf_observations *obs, size_t k) {
+  const double *n = obs->normal + 3 * k, *v = obs->view + 3 * k;
+  double best = -1.0;
+  for (int j = 0; j < obs->lights; ++j) {
+    size_t slot = k * (size_t)obs->lights + (size_t)j;
+    const double *l = obs->light_dir + 3 * slot, *e = obs->irradiance + 3 * slot;
+    if (e[0] + e[1] + e[2] <= 0.0 || n[0] * l[0] + n[1] * l[1] + n[2] * l[2] <= 0.0) continue;
+    double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
+    double length = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    if (length > 0.0) best = fmax(best, (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / length);
+  }
+  return best;
+}
+
 cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
                                    const cf_image *mask, const cf_decode *decode, cf_error *err) {
   cf_observations *o = &capture->obs;

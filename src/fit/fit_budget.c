@@ -39,7 +39,7 @@ static cf_status importance_strata(const cf_observations *obs, const fit_populat
     return cf_error_set(err, CF_ENOMEM, "out of memory for a budget of %zu observations", n);
   }
   for (size_t i = 0; i < n; ++i)
-    score[i] = sorted[i] = fit_observation_specularity(obs, member(from, i));
+    score[i] = sorted[i] = cf_observation_specularity(obs, member(from, i));
   size_t top = n / 16 > 0 ? n / 16 : 1; /* the highlights: the `top` nearest */
   double threshold = n ? fit_kth_smallest(sorted, n, n - top) : 0.0;
   for (size_t i = 0; i < n; ++i) {

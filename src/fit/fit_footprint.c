@@ -76,7 +76,7 @@ static cf_status choose_samples(const fit_problem *p, const cf_capture *capture,
   double reach = sqrt(5.0 / (3.0 * o->footprint_tolerance)) + 0.5 * sqrt(2.0);
   for (size_t i = 0; i < p->count; ++i) {
     size_t k = observation(p, i);
-    double cos_h = fit_observation_specularity(p->obs, k);
+    double cos_h = cf_observation_specularity(p->obs, k);
     if (cos_h <= -1.0) continue; /* unlit */
     double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
     if (theta_h >= reach * delta_max) continue;

@@ -13,20 +13,6 @@ static size_t observation(const fit_problem *p, size_t i) {
   return p->index ? p->index[i] : i;
 }
 
-double fit_observation_specularity(const cf_observations *obs, size_t k) {
-  const double *n = obs->normal + 3 * k, *v = obs->view + 3 * k;
-  double best = -1.0;
-  for (int j = 0; j < obs->lights; ++j) {
-    size_t slot = k * (size_t)obs->lights + (size_t)j;
-    const double *l = obs->light_dir + 3 * slot, *e = obs->irradiance + 3 * slot;
-    if (e[0] + e[1] + e[2] <= 0.0 || n[0] * l[0] + n[1] * l[1] + n[2] * l[2] <= 0.0) continue;
-    double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
-    double length = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-    if (length > 0.0) best = fmax(best, (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / length);
-  }
-  return best;
-}
-
 void fit_sample_free(fit_sample *sample) {
   free(sample->index);
   free(sample->weight);
@@ -57,7 +43,7 @@ cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from
     return CF_OK;
   }
   for (size_t i = 0; i < n; ++i)
-    score[i] = sorted[i] = fit_observation_specularity(obs, from->index ? from->index[i] : i);
+    score[i] = sorted[i] = cf_observation_specularity(obs, from->index ? from->index[i] : i);
   double threshold = fit_kth_smallest(sorted, n, n - n / 16);
   size_t specular = 0;
   for (size_t i = 0; i < n; ++i) specular += score[i] >= threshold;

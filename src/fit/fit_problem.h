@@ -103,10 +103,6 @@ typedef struct fit_problem {
   int *block_residuals;
 } fit_problem;
 
-/* How near observation k's half vector comes to its normal, for any lit
- * light: max_j n·normalize(l_j + v) (−1 when no light reaches it). */
-double fit_observation_specularity(const cf_observations *obs, size_t k);
-
 /* The pairs of one surface point with each of `lights` lights: their
  * geometry and weights scale · E_c c_i (0 where unlit), into geometry
  * (lights) and weight (3 × lights). */

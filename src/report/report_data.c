@@ -12,17 +12,10 @@ static double dot3(const double *a, const double *b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* Degrees between the normal and the nearest half vector of a lit light. */
+/* Degrees between the normal and the nearest half vector of a lit light
+ * (NaN where no light reaches the observation). */
 static double half_angle(const cf_observations *o, size_t i) {
-  const double *n = o->normal + 3 * i, *v = o->view + 3 * i;
-  double best = -1.0;
-  for (int j = 0; j < o->lights; ++j) {
-    size_t slot = i * (size_t)o->lights + (size_t)j;
-    const double *l = o->light_dir + 3 * slot, *e = o->irradiance + 3 * slot;
-    if (e[0] + e[1] + e[2] <= 0.0 || dot3(n, l) <= 0.0) continue;
-    double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]}, length = sqrt(dot3(h, h));
-    if (length > 0.0) best = fmax(best, dot3(n, h) / length);
-  }
+  double best = cf_observation_specularity(o, i);
   return best < -0.5 ? NAN : acos(fmin(1.0, best)) * DEGREES;
 }
 
