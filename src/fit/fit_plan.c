@@ -49,20 +49,18 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   return fit_problem_finish(p, err);
 }
 
+void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
+  *problem = (cf_lsq_problem){
+      p->num_unknowns,           x, p->lower,   p->upper, p->num_blocks, fit_problem_evaluate,
+      fit_problem_block_columns, p, p->at_bound};
+}
+
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err) {
   double x[FIT_MAX_FREE];
   fit_problem_get_x(p, x);
-  cf_lsq_problem problem = {p->num_unknowns,
-                            x,
-                            p->lower,
-                            p->upper,
-                            p->num_blocks,
-                            p->block_residuals,
-                            fit_problem_evaluate,
-                            fit_problem_block_columns,
-                            p,
-                            p->at_bound};
+  cf_lsq_problem problem;
+  fit_lsq_problem(p, x, &problem);
   cf_lsq_options options;
   cf_lsq_default_options(&options);
   options.max_iterations = max_iterations;

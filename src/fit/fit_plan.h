@@ -33,6 +33,10 @@ cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_p
 /* Declare the plan's unknowns on the problem. */
 cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err);
 
+/* The problem as lsq.h sees it, over the unknowns x (num_unknowns; the
+ * caller fills them, fit_problem_get_x). */
+void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem);
+
 /* Solve the problem from its current values (lsq.h); the solution becomes
  * the current values, p->at_bound says which unknowns ended at a bound. */
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,

@@ -139,7 +139,8 @@ void fit_problem_release(fit_problem *p) {
   free(p->weight);
   free(p->inv_sigma);
   free(p->log_exposures);
-  free(p->block_residuals);
+  free(p->block_column_begin);
+  free(p->block_column);
   free(p->sample_root);
   free(p->slot_begin);
   free(p->samples);
@@ -248,16 +249,43 @@ void fit_problem_free_exposures(fit_problem *p) {
     add_unknown(p, FIT_LOG_EXPOSURE, (int)k, -HUGE_VAL, HUGE_VAL);
 }
 
+/* The blocks and their columns: the model's, the scale's and the
+ * response's in every block; an exposure's where its image is (every
+ * exposure where the last image is). */
 cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
   p->num_blocks = (p->count + p->block_size - 1) / p->block_size;
-  free(p->block_residuals);
-  p->block_residuals = malloc((p->num_blocks ? p->num_blocks : 1) * sizeof *p->block_residuals);
-  if (!p->block_residuals) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t b = 0; b < p->num_blocks; ++b) {
-    size_t n = p->count - b * p->block_size;
-    p->block_residuals[b] = (int)(3 * (n < p->block_size ? n : p->block_size));
+  free(p->block_column_begin);
+  free(p->block_column);
+  p->block_column = NULL;
+  p->block_column_begin = malloc((p->num_blocks + 1) * sizeof *p->block_column_begin);
+  unsigned char *seen = calloc(p->images ? p->images : 1, 1);
+  size_t capacity = 0;
+  int failed = !p->block_column_begin || !seen;
+  if (!failed) p->block_column_begin[0] = 0;
+  for (size_t b = 0; !failed && b < p->num_blocks; ++b) {
+    size_t begin = b * p->block_size;
+    size_t end = p->count - begin < p->block_size ? p->count : begin + p->block_size;
+    for (size_t i = begin; i < end; ++i) seen[p->image[i]] = 1;
+    int has_last = seen[p->last_image];
+    size_t k = p->block_column_begin[b];
+    if (k + (size_t)p->num_unknowns + 1 > capacity) { /* room for this block's */
+      capacity = 2 * (k + (size_t)p->num_unknowns + 1);
+      int *grown = realloc(p->block_column, capacity * sizeof *grown);
+      if (!grown) {
+        failed = 1;
+        break;
+      }
+      p->block_column = grown;
+    }
+    for (int u = 0; u < p->num_unknowns; ++u) {
+      const fit_unknown *unk = &p->unknowns[u];
+      if (unk->kind != FIT_LOG_EXPOSURE || has_last || seen[unk->slot]) p->block_column[k++] = u;
+    }
+    p->block_column_begin[b + 1] = k;
+    for (size_t i = begin; i < end; ++i) seen[p->image[i]] = 0;
   }
-  return CF_OK;
+  free(seen);
+  return failed ? cf_error_set(err, CF_ENOMEM, "out of memory for the residual blocks") : CF_OK;
 }
 
 void fit_problem_get_x(const fit_problem *p, double *x) {
@@ -338,8 +366,86 @@ static double robust(const fit_problem *p, double s, double *rho1) {
 
 /* ---- residuals ---- */
 
-int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *residuals,
-                         double *jacobian) {
+/* The channel a model slot moves: c for component c of an RGB parameter,
+ * −1 (all three) for a scalar one. */
+static int slot_channel(cf_model_id model, int slot) {
+  const cf_model_info *m = cf_model_info_get(model);
+  for (int j = m->param_count - 1; j >= 0; --j)
+    if (slot >= m->offsets[j])
+      return cf_param_info_get(m->params[j])->components == 3 ? slot - m->offsets[j] : -1;
+  return -1;
+}
+
+/* The normal equations of one channel's rows of one image, in a small
+ * dense layout: the model unknowns that move the channel, then the log
+ * gain (the scale's and the image's exposure's derivative, which are the
+ * same), then the response. Rows add here without indirection; the sums go
+ * to the block's columns when the image changes (fit_problem_evaluate). */
+enum { LOCAL_MAX = CF_MAX_DIM + 2 };
+typedef struct local_normal {
+  int size;
+  double a[LOCAL_MAX][LOCAL_MAX]; /* lower triangle */
+  double b[LOCAL_MAX];
+} local_normal;
+
+static void local_add(local_normal *n, const double *v, double u) {
+  for (int i = 0; i < n->size; ++i) {
+    double vi = v[i];
+    n->b[i] += vi * u;
+    for (int j = 0; j <= i; ++j) n->a[i][j] += vi * v[j];
+  }
+}
+
+/* Where the local indices go: one column each, but the log gain's, which
+ * goes to the scale's and the image's exposure's columns (or, for the last
+ * image, to minus every exposure's). */
+typedef struct local_map {
+  int column[LOCAL_MAX];
+  int gain; /* the log gain's local index, or −1 */
+  const int *gain_column;
+  const double *gain_sign;
+  int gain_count;
+} local_map;
+
+static int local_targets(const local_map *map, int i, const int **column, const double **sign) {
+  static const double one = 1.0;
+  if (i == map->gain) {
+    *column = map->gain_column;
+    *sign = map->gain_sign;
+    return map->gain_count;
+  }
+  *column = &map->column[i];
+  *sign = &one;
+  return 1;
+}
+
+/* The local sums into the block's k × k jtj (both triangles) and jtu, then
+ * zeroed. */
+static void local_flush(local_normal *n, const local_map *map, int k, double *jtj, double *jtu) {
+  for (int i = 0; i < n->size; ++i) {
+    const int *ci, *cj;
+    const double *si, *sj;
+    int count_i = local_targets(map, i, &ci, &si);
+    for (int x = 0; x < count_i; ++x) jtu[ci[x]] += si[x] * n->b[i];
+    for (int j = 0; j <= i; ++j) {
+      double value = n->a[i][j];
+      if (value == 0.0) continue;
+      int count_j = local_targets(map, j, &cj, &sj);
+      for (int x = 0; x < count_i; ++x)
+        for (int y = 0; y < count_j; ++y) {
+          double v = si[x] * sj[y] * value;
+          jtj[(size_t)ci[x] * (size_t)k + (size_t)cj[y]] += v;
+          if (i != j) jtj[(size_t)cj[y] * (size_t)k + (size_t)ci[x]] += v;
+        }
+    }
+  }
+  int size = n->size;
+  memset(n, 0, sizeof *n);
+  n->size = size;
+}
+
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
+                         double *jtu) {
   const fit_problem *p = user;
   size_t begin = block * p->block_size;
   size_t n = p->count - begin < p->block_size ? p->count - begin : p->block_size;
@@ -349,16 +455,34 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
   if (n > 0) last_pair = fit_problem_slot_range(p, begin + n - 1, &last_pair) + last_pair;
   size_t pairs = last_pair - first_pair;
   const int dim = p->dim, unknowns = p->num_unknowns;
+  const int *columns = NULL;
+  int k = 0;
   double params[CF_MAX_DIM], log_scale, response;
   double *log_e = malloc(p->images * sizeof *log_e);
   double *f = malloc(3 * pairs * sizeof *f);
-  double *grad = jacobian ? malloc(3 * (size_t)dim * pairs * sizeof *grad) : NULL;
-  int ok = log_e && f && (!jacobian || grad);
-  /* the model unknowns' slots and d param / d x: 1, ρ for log ρ, 1/(2σ)
-   * for σ²; the scale's and the exposures' columns */
-  int model_u[CF_MAX_DIM], model_slot[CF_MAX_DIM], model_count = 0, scale_u = -1, exposures = 0;
-  int response_u = -1;
-  double model_factor[CF_MAX_DIM];
+  double *grad = jtj ? malloc(3 * (size_t)dim * pairs * sizeof *grad) : NULL;
+  /* each unknown's place among the block's k columns; where the log gain
+   * goes for the current image */
+  int *place = jtj ? malloc(((size_t)unknowns + 1) * sizeof *place) : NULL;
+  int *gain_column = jtj ? malloc(((size_t)unknowns + 1) * sizeof *gain_column) : NULL;
+  double *gain_sign = jtj ? malloc(((size_t)unknowns + 1) * sizeof *gain_sign) : NULL;
+  local_normal local[3];
+  local_map map[3];
+  int ok = log_e && f && (!jtj || (grad && place && gain_column && gain_sign));
+  if (ok && jtj) {
+    columns = p->block_column + p->block_column_begin[block];
+    k = (int)(p->block_column_begin[block + 1] - p->block_column_begin[block]);
+    for (int u = 0; u < unknowns; ++u) place[u] = -1;
+    for (int c = 0; c < k; ++c) place[columns[c]] = c;
+    memset(jtj, 0, (size_t)k * (size_t)k * sizeof *jtj);
+    memset(jtu, 0, (size_t)k * sizeof *jtu);
+  }
+  /* per channel, the model unknowns that move it, their slots and
+   * d param / d x (1, ρ for log ρ, 1/(2σ) for σ²); the scale's, the
+   * response's and the exposures' unknowns */
+  int channel_u[3][CF_MAX_DIM], channel_slot[3][CF_MAX_DIM], channel_count[3] = {0, 0, 0};
+  double channel_factor[3][CF_MAX_DIM];
+  int scale_u = -1, response_u = -1, exposures = 0;
   int *exposure_u = p->images > 0 ? malloc(p->images * sizeof *exposure_u) : NULL;
   ok = ok && exposure_u;
   if (ok) {
@@ -366,7 +490,7 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
     /* σ² unknowns: evaluate at σ >= 1e-6, so that ∂f/∂σ² = (∂f/∂σ)/(2σ)
      * has no 0/0 (f depends on σ through σ² only, and differs from its
      * value at σ = 0 by about 1e-13 relative there) */
-    for (size_t k = 0; k < p->images; ++k) exposure_u[k] = -1;
+    for (size_t i = 0; i < p->images; ++i) exposure_u[i] = -1;
     for (int u = 0; u < unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];
       if (unk->kind == FIT_SQUARE_SLOT) params[unk->slot] = fmax(params[unk->slot], 1e-6);
@@ -381,20 +505,57 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       const fit_unknown *unk = &p->unknowns[u];
       if (unk->kind != FIT_MODEL_SLOT && unk->kind != FIT_LOG_SLOT && unk->kind != FIT_SQUARE_SLOT)
         continue;
-      model_u[model_count] = u;
-      model_slot[model_count] = unk->slot;
-      model_factor[model_count++] = unk->kind == FIT_LOG_SLOT      ? params[unk->slot]
-                                    : unk->kind == FIT_SQUARE_SLOT ? 0.5 / params[unk->slot]
-                                                                   : 1.0;
+      double factor = unk->kind == FIT_LOG_SLOT      ? params[unk->slot]
+                      : unk->kind == FIT_SQUARE_SLOT ? 0.5 / params[unk->slot]
+                                                     : 1.0;
+      int moves = slot_channel(p->model, unk->slot);
+      for (int c = 0; c < 3; ++c) {
+        if (moves >= 0 && moves != c) continue;
+        int q = channel_count[c]++;
+        channel_u[c][q] = u;
+        channel_slot[c][q] = unk->slot;
+        channel_factor[c][q] = factor;
+      }
+    }
+    for (int c = 0; jtj && c < 3; ++c) { /* each channel's local layout */
+      memset(&local[c], 0, sizeof local[c]);
+      local_map *lm = &map[c];
+      int size = channel_count[c];
+      for (int q = 0; q < size; ++q) lm->column[q] = place[channel_u[c][q]];
+      lm->gain = scale_u >= 0 || exposures ? size++ : -1;
+      if (response_u >= 0) lm->column[size++] = place[response_u];
+      lm->gain_column = gain_column;
+      lm->gain_sign = gain_sign;
+      lm->gain_count = 0;
+      local[c].size = size;
     }
     ok = cf_eval_batch(p->model, params, pairs, p->geometry + first_pair, f, grad) == CF_OK;
   }
   double total = 0.0; /* Σ w ρ */
+  uint32_t gain_image = UINT32_MAX;
+  double gain = 0.0;
   for (size_t i = 0; ok && i < n; ++i) {
     size_t row = begin + i;
     const double *y = p->y + 3 * row;
     uint32_t image = p->image[row];
-    double gain = exp(log_scale + log_e[image]);
+    if (image != gain_image) {
+      gain = exp(log_scale + log_e[image]);
+      if (jtj) { /* the last image's sums, and where this image's log gain goes */
+        int count = 0;
+        for (int c = 0; c < 3 && gain_image != UINT32_MAX; ++c)
+          local_flush(&local[c], &map[c], k, jtj, jtu);
+        if (scale_u >= 0) gain_column[count] = place[scale_u], gain_sign[count++] = 1.0;
+        if (exposures && image == p->last_image) { /* log e_last = −Σ of the others */
+          for (size_t e = 0; e + 1 < p->images; ++e)
+            if (exposure_u[e] >= 0)
+              gain_column[count] = place[exposure_u[e]], gain_sign[count++] = -1.0;
+        } else if (exposures && exposure_u[image] >= 0) {
+          gain_column[count] = place[exposure_u[image]], gain_sign[count++] = 1.0;
+        }
+        for (int c = 0; c < 3; ++c) map[c].gain_count = count;
+      }
+      gain_image = image;
+    }
     size_t first;
     size_t slots = fit_problem_slot_range(p, row, &first);
     const double *w = p->weight + 3 * first;
@@ -439,52 +600,41 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       double rho1, root = p->sample_root ? p->sample_root[row] : 1.0;
       double rho = robust(p, r * r, &rho1);
       total += root * root * rho;
-      size_t out = 3 * i + (size_t)c;
       if (!isfinite(rho)) ok = 0;
-      if (residuals) residuals[out] = root * sqrt(rho1) * r;
-      if (!jacobian) continue;
-      double *row_j = jacobian + out * (size_t)unknowns;
-      /* Ceres checks the arrays for non-finite values: 0, not 0·∞ */
-      double scale = censored ? 0.0 : root * sqrt(rho1) * inv_sigma;
-      if (exposures) memset(row_j, 0, (size_t)unknowns * sizeof *row_j);
-      double model_scale = scale * chain * gain * weight_one;
-      for (int m = 0; m < model_count; ++m)
-        row_j[model_u[m]] = model_scale * dmodel[model_slot[m]] * model_factor[m];
+      if (!jtj || censored) continue; /* a censored residual's row is 0 */
+      /* the row of J: u = √w √ρ' r and its derivatives */
+      double scale = root * sqrt(rho1) * inv_sigma, u = scale * (prediction - y[c]);
+      double model_scale = scale * chain * gain * weight_one, v[LOCAL_MAX];
+      int m = 0;
+      for (int q = 0; q < channel_count[c]; ++q)
+        v[m++] = model_scale * dmodel[channel_slot[c][q]] * channel_factor[c][q];
       /* ∂ prediction / ∂ log gain = γ · prediction = chain · linear */
-      double d_log_gain = scale * chain * linear;
-      if (scale_u >= 0) row_j[scale_u] = d_log_gain;
-      if (response_u >= 0) row_j[response_u] = scale * prediction * log_linear;
-      if (!exposures) continue;
-      /* log e_k: this image's, or for the last image −Σ of the others */
-      if (image == p->last_image) {
-        for (size_t e = 0; e + 1 < p->images; ++e)
-          if (exposure_u[e] >= 0) row_j[exposure_u[e]] = -d_log_gain;
-      } else if (exposure_u[image] >= 0) {
-        row_j[exposure_u[image]] = d_log_gain;
-      }
+      if (map[c].gain >= 0) v[m++] = scale * chain * linear;
+      if (response_u >= 0) v[m++] = scale * prediction * log_linear;
+      local_add(&local[c], v, u);
     }
+  }
+  if (ok && jtj) { /* the last image's sums; a non-finite entry fails the block */
+    for (int c = 0; c < 3 && gain_image != UINT32_MAX; ++c)
+      local_flush(&local[c], &map[c], k, jtj, jtu);
+    for (int a = 0; a < k; ++a)
+      ok = ok && isfinite(jtu[a]) && isfinite(jtj[(size_t)a * (size_t)k + (size_t)a]);
   }
   *cost = 0.5 * total;
   free(exposure_u);
   free(log_e);
   free(f);
   free(grad);
+  free(place);
+  free(gain_column);
+  free(gain_sign);
   return ok && isfinite(*cost);
 }
 
-int fit_problem_block_columns(void *user, size_t block, int *columns) {
+int fit_problem_block_columns(void *user, size_t block, const int **columns) {
   const fit_problem *p = user;
-  size_t begin = block * p->block_size;
-  size_t end = p->count - begin < p->block_size ? p->count : begin + p->block_size;
-  int has_last = 0, k = 0;
-  for (size_t i = begin; i < end && !has_last; ++i) has_last = p->image[i] == p->last_image;
-  for (int u = 0; u < p->num_unknowns; ++u) {
-    const fit_unknown *unk = &p->unknowns[u];
-    int used = unk->kind != FIT_LOG_EXPOSURE || has_last;
-    for (size_t i = begin; i < end && !used; ++i) used = p->image[i] == (uint32_t)unk->slot;
-    if (used) columns[k++] = u;
-  }
-  return k;
+  *columns = p->block_column + p->block_column_begin[block];
+  return (int)(p->block_column_begin[block + 1] - p->block_column_begin[block]);
 }
 
 cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,

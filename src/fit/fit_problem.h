@@ -100,7 +100,11 @@ typedef struct fit_problem {
   double loss_scale; /* in σ */
   size_t block_size; /* observations per residual block */
   size_t num_blocks;
-  int *block_residuals;
+  /* block b's columns (the unknowns its Jacobian can be nonzero in,
+   * ascending): block_column[block_column_begin[b] ...
+   * block_column_begin[b + 1]) */
+  size_t *block_column_begin;
+  int *block_column;
 } fit_problem;
 
 /* The pairs of one surface point with each of `lights` lights: their
@@ -194,15 +198,17 @@ cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_err
 void fit_problem_get_x(const fit_problem *p, double *x);
 void fit_problem_set_x(fit_problem *p, const double *x);
 
-/* lsq.h's callback: the cost of block `block` at x, and the residuals
- * and Jacobian of its Gauss-Newton model (reweighted by the loss). */
-int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *residuals,
-                         double *jacobian);
+/* lsq.h's callback: the cost of block `block` at x, and the normal
+ * equations of its Gauss-Newton model (reweighted by the loss) over the
+ * block's columns. */
+int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
+                         double *jtu);
 
 /* lsq.h's block_columns: the unknowns block `block` depends on (every
- * model slot and the scale; the exposures of its images, all of them when
- * it holds the last image, whose log exposure is minus their sum). */
-int fit_problem_block_columns(void *user, size_t block, int *columns);
+ * model slot, the scale and the response; the exposures of its images,
+ * all of them when it holds the last image, whose log exposure is minus
+ * their sum). */
+int fit_problem_block_columns(void *user, size_t block, const int **columns);
 
 /* The slots of observation i (of those used): *first and the count. */
 static inline size_t fit_problem_slot_range(const fit_problem *p, size_t i, size_t *first) {

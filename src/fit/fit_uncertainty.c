@@ -21,32 +21,13 @@ double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance
 
 /* JᵀJ over every unknown (n², row-major) at the current values: the
  * covariance's and the rank analysis's one pass over the observations. */
-cf_status fit_normal_matrix(fit_problem *p, double *jtj, cf_error *err) {
-  int n = p->num_unknowns;
-  memset(jtj, 0, (size_t)n * (size_t)n * sizeof *jtj);
-  double x[FIT_MAX_FREE];
+cf_status fit_normal_matrix(fit_problem *p, int threads, double *jtj, cf_error *err) {
+  double x[FIT_MAX_FREE], cost;
   fit_problem_get_x(p, x);
-  for (size_t b = 0; b < p->num_blocks; ++b) {
-    int rows = p->block_residuals[b];
-    double *r = malloc((size_t)rows * sizeof *r), *j = malloc((size_t)rows * (size_t)n * sizeof *j);
-    double cost;
-    if (!r || !j || !fit_problem_evaluate(p, x, b, &cost, r, j)) {
-      free(r);
-      free(j);
-      return cf_error_set(err, CF_ENUMERIC, "the Jacobian could not be evaluated at the solution");
-    }
-    for (int row = 0; row < rows; ++row) {
-      const double *jr = j + (size_t)row * (size_t)n;
-      for (int a = 0; a < n; ++a) {
-        if (jr[a] == 0.0) continue;
-        for (int c = a; c < n; ++c) jtj[a * n + c] += jr[a] * jr[c];
-      }
-    }
-    free(r);
-    free(j);
-  }
-  for (int a = 0; a < n; ++a)
-    for (int c = 0; c < a; ++c) jtj[a * n + c] = jtj[c * n + a];
+  cf_lsq_problem problem;
+  fit_lsq_problem(p, x, &problem);
+  if (!cf_lsq_normal_equations(&problem, threads, jtj, NULL, &cost))
+    return cf_error_set(err, CF_ENUMERIC, "the Jacobian could not be evaluated at the solution");
   return CF_OK;
 }
 

@@ -14,7 +14,7 @@
 double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance);
 
 /* JᵀJ over every unknown (n², row-major) at the current values. */
-cf_status fit_normal_matrix(fit_problem *p, double *jtj, cf_error *err);
+cf_status fit_normal_matrix(fit_problem *p, int threads, double *jtj, cf_error *err);
 
 /* The covariance of the unknowns not at a bound (those at one: rows and
  * columns 0); *rank_deficient when JᵀJ is singular there. */

@@ -15,30 +15,33 @@
 extern "C" {
 #endif
 
-/* Residual block `block` at parameters x: its cost (always), and, when
- * jacobian is not NULL, the residuals u and the row-major Jacobian J
- * (residual_count × num_params) of its Gauss-Newton model: Jᵀu is the
- * cost's gradient and JᵀJ its Gauss-Newton matrix. Without a robust loss
- * u is the residual vector and cost = ½|u|²; with one, u = √ρ' r and
- * cost = ½ Σ ρ(r²) (the reweighted model, whose curvature is right in the
- * loss's tails, where √ρ-transformed residuals would halve it). residuals
- * may be NULL when jacobian is. Returns 0 when the block cannot be
- * computed there (not finite): the solver then rejects the step. Called
- * from several threads at once. */
-typedef int (*cf_lsq_evaluate)(void *user, const double *x, size_t block, double *cost,
-                               double *residuals, double *jacobian);
+/* Residual block `block` at parameters x: its cost (always) and, when jtj
+ * is not NULL, the normal equations of its Gauss-Newton model over the
+ * block's k columns (block_columns, in that order): jtj = JᵀJ (k × k,
+ * row-major, symmetric) and jtu = Jᵀu (k), where u are the model's
+ * residuals and J their Jacobian. Without a robust loss u is the residual
+ * vector and cost = ½|u|²; with one, u = √ρ' r and cost = ½ Σ ρ(r²) (the
+ * reweighted model, whose curvature is right in the loss's tails, where
+ * √ρ-transformed residuals would halve it); either way |u|² <= 2 cost.
+ * The callback accumulates JᵀJ as it evaluates, over each residual's
+ * nonzero entries only, and never forms J: that is the whole price of a
+ * Jacobian beyond the model's own gradient. Returns 0 when the block
+ * cannot be computed there (not finite): the solver then rejects the
+ * step. Called from several threads at once, never for the same block
+ * at the same time. */
+typedef int (*cf_lsq_evaluate)(void *user, const double *x, size_t block, double *cost, double *jtj,
+                               double *jtu);
 
 typedef struct cf_lsq_problem {
   int num_params;
-  double *x;                 /* in: the start; out: the solution */
+  double *x;                   /* in: the start; out: the solution */
   const double *lower, *upper; /* per parameter; ±HUGE_VAL for none */
   size_t num_blocks;
-  const int *block_residuals;  /* residuals in each block */
   cf_lsq_evaluate evaluate;
-  /* optional: the columns of block `block`'s Jacobian that can be nonzero
-   * (structurally, at any x), written to columns; returns their number.
-   * NULL: all of them. */
-  int (*block_columns)(void *user, size_t block, int *columns);
+  /* the columns (parameters) block `block`'s Jacobian can be nonzero in
+   * (structurally, at any x), ascending: *columns points to them (owned
+   * by the caller); returns their number */
+  int (*block_columns)(void *user, size_t block, const int **columns);
   void *user;
   /* out (num_params, optional): −1 or +1 for a parameter that ends at its
    * lower or upper bound with the cost's gradient pointing out of the box
@@ -68,7 +71,7 @@ typedef struct cf_lsq_summary {
   double trace[CF_LSQ_TRACE];
   int trace_count;
   int iterations;
-  int converged;                   /* Ceres' CONVERGENCE */
+  int converged; /* Ceres' CONVERGENCE */
   char termination[64];
   double seconds;
 } cf_lsq_summary;
@@ -77,7 +80,8 @@ typedef struct cf_lsq_summary {
  * for the bounds.
  *
  * Block compression. A block whose model has m residuals u with Jacobian
- * J (m × k in its k nonzero columns) and cost C is handed to Ceres as
+ * J (m × k in its k nonzero columns) and cost C, given as JᵀJ and Jᵀu by
+ * the callback, is handed to Ceres as
  * k + 1 residuals
  *   ρ = (c, d),  c = Λ^(−1/2) Vᵀ Jᵀu,  d = sqrt(2C − |c|²),
  * with the Jacobian (R; 0), R = Λ^(1/2) Vᵀ, where JᵀJ = V Λ Vᵀ. Then
@@ -101,6 +105,13 @@ typedef struct cf_lsq_summary {
  * box is released and the solve repeated (at most a few rounds). */
 cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options *options,
                        cf_lsq_summary *summary, cf_error *err);
+
+/* The normal equations summed over every block at problem->x (blocks
+ * shared among `threads` threads): jtj = JᵀJ (num_params², row-major) and
+ * jtu = Jᵀu (num_params; the cost's gradient), either may be NULL, and
+ * *cost. Returns 0 when a block cannot be evaluated. */
+int cf_lsq_normal_equations(const cf_lsq_problem *problem, int threads, double *jtj, double *jtu,
+                            double *cost);
 
 /* The covariance (JᵀJ)⁻¹ (n², row-major) of a least-squares solution from
  * its normal matrix jtj = JᵀJ (n², row-major), by ceres::Covariance
