@@ -39,44 +39,6 @@ cf_decode capture_image_decode(const cf_capture *capture, const cf_image_info *i
   return d;
 }
 
-static cf_status read_mask(const cf_capture *capture, size_t k, const cf_image *image,
-                           cf_image *mask, cf_error *err) {
-  const char *path = capture->spec.mask_paths[k];
-  cf_status s = cf_image_read(path, mask, NULL, err);
-  if (s == CF_OK && (mask->width != image->width || mask->height != image->height))
-    s = cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d", path,
-                     mask->width, mask->height, capture->spec.image_paths[k], image->width,
-                     image->height);
-  return s;
-}
-
-/* Read image k (and its mask) and add its observations. */
-static cf_status load_image(cf_capture *capture, size_t k, cf_error *err) {
-  const cf_capture_spec *spec = &capture->spec;
-  cf_image image = {0}, mask = {0};
-  cf_image_info info;
-  cf_status s = cf_image_read(spec->image_paths[k], &image, &info, err);
-  if (s == CF_OK) s = cf_image_check_finite(&image, spec->image_paths[k], err);
-  if (s == CF_OK) s = capture_check_size(capture, k, &image, err);
-  if (s == CF_OK && spec->mask_paths) s = read_mask(capture, k, &image, &mask, err);
-  if (s == CF_OK && capture->normal_map.pixels &&
-      (capture->normal_map.width != image.width || capture->normal_map.height != image.height))
-    s = cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
-                     spec->normal_map, capture->normal_map.width, capture->normal_map.height,
-                     spec->image_paths[k], image.width, image.height);
-  double exposure = 1.0;
-  if (s == CF_OK) s = capture_raw_exposure(capture, k, &info, &exposure, err);
-  if (s == CF_OK) {
-    capture->raw_exposures[k] = exposure;
-    capture->images[k].exposure = exposure;
-    cf_decode decode = capture_image_decode(capture, &info, exposure);
-    s = capture_add_observations(capture, k, &image, mask.pixels ? &mask : NULL, &decode, err);
-  }
-  cf_image_free(&image);
-  cf_image_free(&mask);
-  return s;
-}
-
 /* colour.exposure "exif": the exposures' reference is their geometric mean
  * (MODEL.md: fix the reference, or exposures trade with ρ and F0). The
  * radiances were divided by the raw exposures; rescale them. */
@@ -122,13 +84,7 @@ static cf_status load(cf_capture *capture, const char *path, const cf_capture_op
   if ((s = capture_load_surface(capture, options, err)) != CF_OK) return s;
   if ((s = capture_load_lights(capture, err)) != CF_OK) return s;
   capture->obs.lights = capture->max_lights;
-  for (size_t k = 0; k < n; ++k) {
-    if (options && options->progress)
-      options->progress(options->progress_user, "reading images", k, n);
-    if ((s = load_image(capture, k, err)) != CF_OK) return s;
-  }
-  if (options && options->progress)
-    options->progress(options->progress_user, "reading images", n, n);
+  if ((s = capture_read_images(capture, options, err)) != CF_OK) return s;
   if (capture->spec.exposure == CF_EXPOSURE_EXIF) normalise_exif_exposures(capture);
   if ((s = check_sphere_seen(capture, err)) != CF_OK) return s;
   /* the observations' irradiance in absolute units from the reference */

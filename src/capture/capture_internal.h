@@ -112,6 +112,11 @@ void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int 
 cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
                                    const cf_image *mask, const cf_decode *decode, cf_error *err);
 
+/* Read every image (and its mask) and add its observations, in image
+ * order, decoding ahead on other threads (capture_images.c). */
+cf_status capture_read_images(cf_capture *capture, const cf_capture_options *options,
+                              cf_error *err);
+
 /* capture_reference.c: the absolute scale from the capture's reference
  * target (spec.reference), measured in its image (which must have been
  * loaded: its exposure is known) and applied to every light and every

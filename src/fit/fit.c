@@ -126,7 +126,8 @@ static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *
 static cf_status refine_on_subsample(const cf_capture *capture, const fit_population *population,
                                      const cf_fit_options *o, fit_plan *plan, size_t target,
                                      double sigma, double *params, double *log_scale,
-                                     cf_fit_result *r, int *switched, cf_error *err) {
+                                     double *radius, cf_fit_result *r, int *switched,
+                                     cf_error *err) {
   if (population->count < 2 * target) return CF_OK;
   fit_sample sample;
   fit_problem sub;
@@ -150,6 +151,7 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
   if (s == CF_OK) {
     memcpy(params, sub.params, sizeof sub.params);
     *log_scale = sub.log_scale;
+    *radius = sub.radius;
   }
   fit_problem_release(&sub);
   fit_sample_free(&sample);
@@ -267,8 +269,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   /* 3. a larger subsample, then the whole population, with σ and the
    * robust loss */
   int switched = 0;
+  double radius = 0.0; /* the refinement's trust region, where the last solves start */
   s = refine_on_subsample(capture, population, o, &plan, REFINE_TARGET, sigma, params, &log_scale,
-                          r, &switched, err);
+                          &radius, r, &switched, err);
   if (s != CF_OK) return s;
   r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
   clock = then;
@@ -278,6 +281,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   if (population->weight) s = fit_problem_set_sample_weights(&p, population->weight, err);
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
+  p.radius = radius;
   /* an unknown tone curve: the response exponent is fitted from here on
    * (the starts and the subsample assume a linear response) */
   cf_capture_summary about;

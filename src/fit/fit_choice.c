@@ -40,8 +40,8 @@ static cf_status split_sample(const cf_capture *capture, const unsigned char *us
    * (or one image) observations are held out instead */
   int by_image = !exposures_fitted && images >= 2;
   if (by_image && images >= 4)
-    snprintf(heldout, heldout_size, "every fourth image (images 4, 8, ...; %zu of %zu)",
-             images / 4, images);
+    snprintf(heldout, heldout_size, "every fourth image (images 4, 8, ...; %zu of %zu)", images / 4,
+             images);
   else if (by_image)
     snprintf(heldout, heldout_size, "the last image (%zu of %zu)", images, images);
   else
@@ -51,8 +51,10 @@ static cf_status split_sample(const cf_capture *capture, const unsigned char *us
     size_t k = obs->image[i];
     if (use_image && !use_image[k]) continue;
     int test = !by_image ? j % 4 == 3 : images >= 4 ? k % 4 == 3 : k == images - 1;
-    if (test) split->test[split->test_count++] = (uint32_t)i;
-    else split->train[split->train_count++] = (uint32_t)i;
+    if (test)
+      split->test[split->test_count++] = (uint32_t)i;
+    else
+      split->train[split->train_count++] = (uint32_t)i;
   }
   if (split->train_count < 16 || split->test_count < 4)
     return cf_error_set(err, CF_EINVAL,
@@ -113,7 +115,8 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
     if (!c->ok) continue;
     double train_cost, test_cost;
     cf_fit_result on_train, on_test;
-    cf_status s = fit_score_at(capture, train, &c->fit, choice->sigma, &o, &train_cost, &on_train, err);
+    cf_status s =
+        fit_score_at(capture, train, &c->fit, choice->sigma, &o, &train_cost, &on_train, err);
     if (s != CF_OK) return s;
     cf_fit_result_free(&on_train);
     s = fit_score_at(capture, test, &c->fit, choice->sigma, &o, &test_cost, &on_test, err);

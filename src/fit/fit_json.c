@@ -19,7 +19,9 @@ static json_t *value_of(const double *x, int components) {
 }
 
 /* A standard deviation: null where it is not defined (at a bound). */
-static json_t *sd_number(double sd) { return isfinite(sd) ? json_real(sd) : json_null(); }
+static json_t *sd_number(double sd) {
+  return isfinite(sd) ? json_real(sd) : json_null();
+}
 
 static json_t *sd_of(const double *sd, int components) {
   if (components == 1) return sd_number(sd[0]);
@@ -45,13 +47,12 @@ static json_t *params_json(const cf_fit_result *r) {
   for (int j = 0; j < m->param_count; ++j) {
     const cf_param_info *info = cf_param_info_get(m->params[j]);
     int k = m->offsets[j];
-    json_object_set_new(
-        params, info->name,
-        json_pack("{s:o, s:o, s:s, s:o, s:f, s:f, s:s}", "value",
-                  value_of(r->params + k, info->components), "sd",
-                  sd_of(r->sd + k, info->components), "unit", info->unit, "status",
-                  status_of(r->status + k, info->components), "lower", info->lower, "upper",
-                  info->upper, "meaning", info->meaning));
+    json_object_set_new(params, info->name,
+                        json_pack("{s:o, s:o, s:s, s:o, s:f, s:f, s:s}", "value",
+                                  value_of(r->params + k, info->components), "sd",
+                                  sd_of(r->sd + k, info->components), "unit", info->unit, "status",
+                                  status_of(r->status + k, info->components), "lower", info->lower,
+                                  "upper", info->upper, "meaning", info->meaning));
   }
   return params;
 }
@@ -70,8 +71,9 @@ static json_t *derived_json(const cf_fit_result *r, double density) {
     convention = "density (film thickness) given by the user; absorption = tau / density";
   } else {
     d = mean / 0.8;
-    convention = "the photos determine only tau = absorption x density; by MODEL.md's convention "
-                 "the mean absorption over the channels is 0.8, so density = mean(tau) / 0.8";
+    convention =
+        "the photos determine only tau = absorption x density; by MODEL.md's convention "
+        "the mean absorption over the channels is 0.8, so density = mean(tau) / 0.8";
   }
   for (int c = 0; c < 3; ++c) absorption[c] = d > 0.0 ? tau[c] / d : NAN;
   json_t *out = json_pack("{s:f, s:s}", "density", d, "convention", convention);
@@ -86,8 +88,8 @@ static json_t *correlation_json(const cf_fit_result *r) {
   json_t *names = json_array(), *matrix = json_array();
   for (int a = 0; a < r->free_count; ++a) {
     char name[48];
-    json_array_append_new(names, json_string(cf_model_slot_name(r->model, r->free_slots[a], name,
-                                                                sizeof name)));
+    json_array_append_new(
+        names, json_string(cf_model_slot_name(r->model, r->free_slots[a], name, sizeof name)));
     json_array_append_new(matrix, numbers(r->correlation + a * r->free_count, r->free_count));
   }
   return json_pack("{s:o, s:o}", "parameters", names, "matrix", matrix);
@@ -126,33 +128,35 @@ static json_t *params_by_name(cf_model_id model, const double *x) {
   return out;
 }
 
-static json_t *number_or_null(double x) { return isfinite(x) ? json_real(x) : json_null(); }
+static json_t *number_or_null(double x) {
+  return isfinite(x) ? json_real(x) : json_null();
+}
 
 static const char *const loss_names[] = {"none", "huber", "cauchy"};
 
 /* The model choice: the rule, and every candidate's figures. */
 static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
   if (!choice)
-    return json_pack("{s:s, s:s, s:[]}", "mode", "forced", "chosen",
-                     cf_model_info_get(model)->code, "candidates");
+    return json_pack("{s:s, s:s, s:[]}", "mode", "forced", "chosen", cf_model_info_get(model)->code,
+                     "candidates");
   json_t *candidates = json_array();
   for (int m = 0; m < choice->count; ++m) {
     const cf_fit_candidate *c = &choice->candidate[m];
     const char *code = cf_model_info_get(c->model)->code;
     json_t *entry;
     if (!c->ok) {
-      entry = json_pack("{s:s, s:b, s:b, s:f, s:s}", "model", code, "ok", 0, "chosen", 0,
-                        "seconds", c->seconds, "note", c->note);
+      entry = json_pack("{s:s, s:b, s:b, s:f, s:s}", "model", code, "ok", 0, "chosen", 0, "seconds",
+                        c->seconds, "note", c->note);
     } else {
       entry = json_pack(
           "{s:s, s:b, s:b, s:o, s:i, s:I, s:f, s:f, s:I, s:o, s:o, s:o, s:f, s:f, s:f, s:s}",
-          "model", code, "ok", 1, "chosen", c->chosen, "params", params_json(&c->fit),
-          "unknowns", c->parameters, "residuals", (json_int_t)c->residuals, "cost", c->cost,
-          "bic", c->bic, "heldout_residuals", (json_int_t)c->heldout_residuals, "heldout_score",
+          "model", code, "ok", 1, "chosen", c->chosen, "params", params_json(&c->fit), "unknowns",
+          c->parameters, "residuals", (json_int_t)c->residuals, "cost", c->cost, "bic", c->bic,
+          "heldout_residuals", (json_int_t)c->heldout_residuals, "heldout_score",
           number_or_null(c->heldout_score), "heldout_rmse", number_or_null(c->heldout_rmse),
           "heldout_relative_rmse", number_or_null(c->heldout_relative_rmse), "train_rmse",
-          c->fit.rmse, "train_relative_rmse", c->fit.relative_rmse, "seconds", c->seconds,
-          "note", c->note);
+          c->fit.rmse, "train_relative_rmse", c->fit.relative_rmse, "seconds", c->seconds, "note",
+          c->note);
     }
     json_array_append_new(candidates, entry);
   }
@@ -160,10 +164,10 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
       "{s:s, s:s, s:I, s:I, s:s, s:f, s:{s:s, s:f}, s:f, s:f, s:f, s:s, s:o}", "mode", "auto",
       "chosen", cf_model_info_get(choice->chosen)->code, "train_observations",
       (json_int_t)choice->train_observations, "heldout_observations",
-      (json_int_t)choice->heldout_observations, "heldout", choice->heldout, "sigma",
-      choice->sigma, "loss", "type", loss_names[choice->loss], "scale_sigma", choice->loss_scale,
-      "bic_margin", choice->bic_margin, "heldout_margin", choice->heldout_margin, "seconds",
-      choice->seconds, "rule",
+      (json_int_t)choice->heldout_observations, "heldout", choice->heldout, "sigma", choice->sigma,
+      "loss", "type", loss_names[choice->loss], "scale_sigma", choice->loss_scale, "bic_margin",
+      choice->bic_margin, "heldout_margin", choice->heldout_margin, "seconds", choice->seconds,
+      "rule",
       "each model fitted to the training part; BIC = 2 cost + unknowns ln(residuals) there, "
       "cost = 1/2 sum rho(r^2) at the common sigma; heldout_score = sqrt(mean rho(r^2)) on the "
       "held-out part, in sigma; going up the ladder a richer model replaces the choice only "
@@ -177,9 +181,8 @@ static json_t *footprint_json(const cf_fit_report *rep) {
   const cf_fit_result *r = rep->result;
   const char *mode = rep->footprint == 0 ? "auto" : rep->footprint == 1 ? "centre" : "fixed";
   return json_pack("{s:s, s:i, s:f, s:I, s:I, s:i, s:s}", "mode", mode, "samples_per_side",
-                   rep->footprint >= 2 ? rep->footprint : 0, "tolerance",
-                   rep->footprint_tolerance, "observations",
-                   (json_int_t)r->footprint_observations, "samples",
+                   rep->footprint >= 2 ? rep->footprint : 0, "tolerance", rep->footprint_tolerance,
+                   "observations", (json_int_t)r->footprint_observations, "samples",
                    (json_int_t)r->footprint_samples, "max_samples_per_side", r->footprint_max,
                    "meaning",
                    "observations integrated over their pixel with S x S samples (S >= 2) "
@@ -204,15 +207,17 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
   json_t *per_image = json_array();
   for (size_t k = 0; k < r->images; ++k)
     json_array_append_new(
-        per_image, json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
-                             "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k],
-                             "exposure", r->exposures[k]));
+        per_image,
+        json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
+                  "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
+                  r->exposures[k]));
   json_t *starts = json_array();
   for (int i = 0; i < r->starts; ++i)
-    json_array_append_new(starts, json_pack("{s:o, s:o, s:f, s:i}", "start",
-                                            params_by_name(r->model, r->start[i].start), "end",
-                                            params_by_name(r->model, r->start[i].end), "cost",
-                                            r->start[i].cost, "iterations", r->start[i].iterations));
+    json_array_append_new(
+        starts,
+        json_pack("{s:o, s:o, s:f, s:i}", "start", params_by_name(r->model, r->start[i].start),
+                  "end", params_by_name(r->model, r->start[i].end), "cost", r->start[i].cost,
+                  "iterations", r->start[i].iterations));
   json_t *stages = json_object();
   for (int i = 0; i < CF_FIT_STAGE_COUNT; ++i)
     json_object_set_new(stages, cf_fit_stage_name((cf_fit_stage)i), json_real(r->stage_seconds[i]));
@@ -239,28 +244,28 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
       "model", "code", m->code, "name", m->name, "params", params_json(r), "derived",
       derived_json(r, rep->density), "scale", "value", r->scale, "sd", r->scale_sd, "fitted",
       r->scale_fitted, "correlation", correlation_json(r), "held", held, "not_constrained",
-      unconstrained, "at_bound", at_bound, "noise", "model", r->sigma > 0.0 ? "estimated from the residuals" : "capture",
-      "sigma", r->sigma, "loss", "type",
-      loss_names[rep->loss], "scale_sigma", rep->loss_scale, "residuals", "count",
+      unconstrained, "at_bound", at_bound, "noise", "model",
+      r->sigma > 0.0 ? "estimated from the residuals" : "capture", "sigma", r->sigma, "loss",
+      "type", loss_names[rep->loss], "scale_sigma", rep->loss_scale, "residuals", "count",
       (json_int_t)r->residuals, "censored", (json_int_t)r->censored, "rejected",
       (json_int_t)r->rejected, "rmse", r->rmse, "relative_rmse", r->relative_rmse, "per_image",
-      per_image, "highlight_cores", cores, "solver", "iterations", r->iterations, "solves", r->solves, "termination", r->termination, "seconds",
-      r->solve_seconds, "final_cost", r->cost, "starts", starts, "best_start", r->best_start,
-      "warnings", warnings, "timing", "load_s", rep->load_seconds, "fit_s", rep->fit_seconds,
-      "total_s", rep->load_seconds + rep->fit_seconds, "stages", stages);
+      per_image, "highlight_cores", cores, "solver", "iterations", r->iterations, "solves",
+      r->solves, "termination", r->termination, "seconds", r->solve_seconds, "final_cost", r->cost,
+      "starts", starts, "best_start", r->best_start, "warnings", warnings, "timing", "load_s",
+      rep->load_seconds, "fit_s", rep->fit_seconds, "total_s", rep->load_seconds + rep->fit_seconds,
+      "stages", stages);
   if (doc && summary.radiometry_from_reference) /* the capture's scale from its reference */
-    json_object_set_new(json_object_get(doc, "capture"), "reference",
-                        json_pack("{s:f, s:f, s:I}", "scale", summary.reference_scale, "spread",
-                                  summary.reference_spread, "pixels",
-                                  (json_int_t)summary.reference_pixels));
+    json_object_set_new(
+        json_object_get(doc, "capture"), "reference",
+        json_pack("{s:f, s:f, s:I}", "scale", summary.reference_scale, "spread",
+                  summary.reference_spread, "pixels", (json_int_t)summary.reference_pixels));
   if (doc) json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
   if (doc)
     json_object_set_new(json_object_get(doc, "timing"), "choice_s",
                         json_real(rep->choice ? rep->choice->seconds : 0.0));
   if (doc) json_object_set_new(doc, "footprint", footprint_json(rep));
   if (doc)
-    json_object_set_new(json_object_get(doc, "solver"), "trace",
-                        numbers(r->trace, r->trace_count));
+    json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
   if (doc)
     json_object_set_new(
         doc, "response",

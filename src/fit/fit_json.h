@@ -14,7 +14,7 @@ typedef struct cf_fit_report {
   const char *version;
   cf_loss loss;
   double loss_scale;
-  double density;       /* NaN: MODEL.md's convention */
+  double density; /* NaN: MODEL.md's convention */
   double load_seconds, fit_seconds;
   int footprint;              /* cf_fit_options.footprint */
   double footprint_tolerance; /* cf_fit_options.footprint_tolerance */

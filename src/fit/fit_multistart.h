@@ -15,8 +15,7 @@
  * noise model). */
 cf_status fit_multistart(const cf_capture *capture, const fit_population *population,
                          const cf_fit_options *o, const fit_plan *plan, cf_fit_result *r,
-                         double *best_params, double *best_log_scale, double *sigma,
-                         cf_error *err);
+                         double *best_params, double *best_log_scale, double *sigma, cf_error *err);
 
 /* σ estimated from the residuals at a given start (the start given in the
  * options instead of the multi-start), on a subsample of the population. */

@@ -49,6 +49,11 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   return fit_problem_finish(p, err);
 }
 
+/* A trust region carried to the next solve is at most this wide: a step
+ * that fails there shrinks it by 2, 4, 8, … (a cost pass each), so from
+ * here a few failures reach any useful radius. */
+#define MAX_CARRIED_RADIUS 1e10
+
 void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
   *problem = (cf_lsq_problem){
       p->num_unknowns,           x, p->lower,   p->upper, p->num_blocks, fit_problem_evaluate,
@@ -65,7 +70,10 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   cf_lsq_default_options(&options);
   options.max_iterations = max_iterations;
   options.threads = o->threads > 0 ? o->threads : 2;
+  if (p->radius > 0.0) options.initial_radius = p->radius;
+  if (p->function_tolerance > 0.0) options.function_tolerance = p->function_tolerance;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);
+  if (s == CF_OK) p->radius = fmin(summary->final_radius, MAX_CARRIED_RADIUS);
   if (s == CF_OK) fit_problem_set_x(p, x);
   if (s == CF_OK) {
     ++p->solves;

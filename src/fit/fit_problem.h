@@ -92,6 +92,11 @@ typedef struct fit_problem {
   double trace[CF_FIT_MAX_TRACE]; /* the costs of its solves' iterations, in order */
   int trace_count;
   double solver_seconds;
+  /* the trust region the last solve ended with (0: none yet), where the
+   * next starts (lsq.h) */
+  double radius;
+  /* the solves' relative function tolerance (0: lsq.h's default) */
+  double function_tolerance;
   int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
                                  at its lower/upper bound by the data
                                  (lsq.h), else 0 */

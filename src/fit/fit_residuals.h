@@ -5,8 +5,8 @@
 
 #include <stddef.h>
 
-#include "clayfit/fit.h"
 #include "clayfit/capture.h"
+#include "clayfit/fit.h"
 #include "fit_problem.h"
 
 /* RMSE, relative RMSE, censored and rejected counts, per image, at the

@@ -9,7 +9,9 @@ static void put(double *x, const int *held, int slot, double value) {
 }
 
 /* A value inside [lo, hi], for a start. */
-static double inside(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
+static double inside(double x, double lo, double hi) {
+  return x < lo ? lo : x > hi ? hi : x;
+}
 
 /* M4 from a fitted M2 (ρ, σ, r, F0): its lobe as the film's or the base's. */
 static int clay_from_dielectric(const double *base, const int *held, const double *m2,
@@ -17,7 +19,8 @@ static int clay_from_dielectric(const double *base, const int *held, const doubl
   static const double base_roughness[] = {0.25, 0.6, 0.95}, base_f0[] = {0.005, 0.03};
   static const double film_roughness[] = {0.08, 0.9}, tau[] = {0.05, 0.5};
   double r = m2[CF_DIELECTRIC_ROUGHNESS], f0 = m2[CF_DIELECTRIC_F0];
-  double sigma = m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] > 0.05 ? m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] : 0.15;
+  double sigma =
+      m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] > 0.05 ? m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] : 0.15;
   int n = 0;
   for (int order = 0; order < 2; ++order)
     for (int t = 0; t < 2; ++t)
@@ -56,7 +59,8 @@ static int clearcoat_from_dielectric(const double *base, const int *held, const 
       memcpy(starts[n], base, sizeof starts[0]);
       for (int k = 0; k < CF_DIELECTRIC_DIM; ++k) put(starts[n], held, k, m2[k]);
       for (int c = 0; c < 3; ++c)
-        put(starts[n], held, CF_CLEARCOAT_ALBEDO + c, inside(m2[CF_DIELECTRIC_ALBEDO + c], 0.02, 0.98));
+        put(starts[n], held, CF_CLEARCOAT_ALBEDO + c,
+            inside(m2[CF_DIELECTRIC_ALBEDO + c], 0.02, 0.98));
       if (m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] < 0.05)
         put(starts[n], held, CF_CLEARCOAT_DIFFUSE_ROUGHNESS, 0.15);
       put(starts[n], held, CF_CLEARCOAT_COAT_WEIGHT, weight[i]);

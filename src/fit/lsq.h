@@ -58,6 +58,10 @@ typedef struct cf_lsq_options {
    * another solve (the fit's costs are in units of σ²: 1e-3 is a change
    * of χ² by 0.002) */
   double line_search_tolerance;
+  /* the Levenberg-Marquardt trust region to start from (Ceres' 1e4 by
+   * default): a solve near where another ended starts from its final
+   * radius, not damping the ill-conditioned directions all over again */
+  double initial_radius;
 } cf_lsq_options;
 
 void cf_lsq_default_options(cf_lsq_options *options);
@@ -74,6 +78,7 @@ typedef struct cf_lsq_summary {
   int converged; /* Ceres' CONVERGENCE */
   char termination[64];
   double seconds;
+  double final_radius; /* the trust region at the end */
 } cf_lsq_summary;
 
 /* Solve (Levenberg-Marquardt, dense normal equations) with an active set

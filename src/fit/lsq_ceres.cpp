@@ -248,6 +248,7 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->gradient_tolerance = 1e-12;
   options->parameter_tolerance = 1e-10;
   options->line_search_tolerance = 1e-3;
+  options->initial_radius = 1e4;
 }
 
 namespace {
@@ -458,12 +459,14 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     double seconds = 0.0, initial_cost = 0.0;
     std::vector<double> x0(n);
     int extrapolations = 0;
-    double radius = 1e4;  // Ceres' default, then carried from chunk to chunk
+    double radius = options->initial_radius > 0.0 ? options->initial_radius : 1e4;
     for (int round = 0; round < MAX_ROUNDS;) {
       BoundWatcher watcher(problem, active);
       int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
       std::copy(problem->x, problem->x + n, x0.begin());
       solve_once(problem, options, active, budget, radius, &watcher, &ceres_summary);
+      if (std::getenv("CLAYFIT_LSQ_TRACE") != nullptr)
+        std::printf("chunk of solve: round %d, %s\n", round, ceres_summary.message.c_str());
       if (!ceres_summary.iterations.empty())
         radius = ceres_summary.iterations.back().trust_region_radius;
       if (round == 0 && extrapolations == 0 && iterations == 0)
@@ -496,6 +499,10 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       }
       // the end of a solve: parameters at a bound join the active set when
       // the gradient pushes them out, and leave it when it pulls them in
+      // (none at a bound: nothing to decide, and no pass for the gradient)
+      bool any_at_bound = false;
+      for (int i = 0; i < n; ++i) any_at_bound |= watcher.side_of(static_cast<size_t>(i)) != 0;
+      if (!any_at_bound) break;
       if (!gradient_at(problem, options->threads, &gradient)) break;
       bool released = false;
       for (int i = 0; i < n; ++i) {
@@ -515,6 +522,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     summary->trace_count = trace_count;
     summary->converged = ceres_summary.termination_type == ceres::CONVERGENCE;
     summary->seconds = seconds;
+    summary->final_radius = radius;
     copy_termination(ceres_summary, summary);
     if (ceres_summary.termination_type == ceres::FAILURE)
       return cf_error_set(err, CF_ENUMERIC, "the solver failed: %s", ceres_summary.message.c_str());

@@ -22,9 +22,12 @@ double fit_kth_smallest(double *a, size_t n, size_t k) {
         ++i;
       }
     }
-    if (target < lt) hi = lt - 1;
-    else if (target > gt) lo = gt + 1;
-    else return pivot;
+    if (target < lt)
+      hi = lt - 1;
+    else if (target > gt)
+      lo = gt + 1;
+    else
+      return pivot;
   }
   return a[target];
 }
