@@ -82,13 +82,47 @@ static void base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_
     if (plan->status[c] == CF_PARAM_FITTED) params[c] = fmin(0.98, fmax(0.02, rho[c]));
 }
 
-/* Run `count` starts of `model` on the problem to convergence; the best is
- * r->start[r->best_start]. */
+/* A start that comes within START_SAME_BASIN of every unknown's range (1
+ * for an unbounded one, in log units) of where an earlier start ended has
+ * found that minimum again: it stops there instead of converging to it
+ * (its cost is then a little above the earlier start's). */
+#define START_SAME_BASIN 0.01
+
+typedef struct earlier_ends {
+  const fit_problem *p;
+  double *x; /* count × num_unknowns */
+  int count;
+} earlier_ends;
+
+static int reached_earlier_end(void *user, const double *x, double cost) {
+  const earlier_ends *e = user;
+  const fit_problem *p = e->p;
+  (void)cost;
+  for (int j = 0; j < e->count; ++j) {
+    const double *end = e->x + (size_t)j * (size_t)p->num_unknowns;
+    int near = 1;
+    for (int i = 0; i < p->num_unknowns && near; ++i) {
+      double width =
+          isfinite(p->lower[i]) && isfinite(p->upper[i]) ? p->upper[i] - p->lower[i] : 1.0;
+      near = fabs(x[i] - end[i]) <= START_SAME_BASIN * width;
+    }
+    if (near) return 1;
+  }
+  return 0;
+}
+
+/* Run `count` starts of `model` on the problem to convergence (or to an
+ * earlier start's minimum); the best is r->start[r->best_start]. */
 static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit_plan *plan,
                             double (*starts)[CF_MAX_DIM], int count, double log_scale,
                             cf_fit_result *r, double *log_scales, cf_error *err) {
   cf_status s = fit_declare(sub, plan, err);
   sub->function_tolerance = START_TOLERANCE;
+  earlier_ends ends = {sub, NULL, 0};
+  if (s == CF_OK && !(ends.x = malloc((size_t)count * (size_t)sub->num_unknowns * sizeof *ends.x)))
+    s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  sub->stop = reached_earlier_end;
+  sub->stop_user = &ends;
   r->starts = 0;
   r->best_start = 0;
   for (int i = 0; s == CF_OK && i < count; ++i) {
@@ -106,7 +140,12 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
     start->iterations = summary.iterations;
     log_scales[i] = sub->log_scale;
     if (start->cost < r->start[r->best_start].cost) r->best_start = i;
+    if (!summary.stopped)
+      fit_problem_get_x(sub, ends.x + (size_t)ends.count++ * (size_t)sub->num_unknowns);
   }
+  sub->stop = NULL;
+  sub->stop_user = NULL;
+  free(ends.x);
   fit_progress(o, "multi-start", (size_t)count, (size_t)count);
   return s;
 }

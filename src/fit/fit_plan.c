@@ -72,6 +72,8 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   options.threads = o->threads > 0 ? o->threads : 2;
   if (p->radius > 0.0) options.initial_radius = p->radius;
   if (p->function_tolerance > 0.0) options.function_tolerance = p->function_tolerance;
+  options.stop = p->stop;
+  options.stop_user = p->stop_user;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);
   if (s == CF_OK) p->radius = fmin(summary->final_radius, MAX_CARRIED_RADIUS);
   if (s == CF_OK) fit_problem_set_x(p, x);

@@ -97,6 +97,9 @@ typedef struct fit_problem {
   double radius;
   /* the solves' relative function tolerance (0: lsq.h's default) */
   double function_tolerance;
+  /* optional: ends a solve early (lsq.h's cf_lsq_options.stop) */
+  int (*stop)(void *user, const double *x, double cost);
+  void *stop_user;
   int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
                                  at its lower/upper bound by the data
                                  (lsq.h), else 0 */

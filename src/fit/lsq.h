@@ -62,6 +62,11 @@ typedef struct cf_lsq_options {
    * default): a solve near where another ended starts from its final
    * radius, not damping the ill-conditioned directions all over again */
   double initial_radius;
+  /* optional: called after every successful iteration with x and the
+   * cost; nonzero ends the solve there (a multi-start's start that has
+   * reached another's minimum) */
+  int (*stop)(void *user, const double *x, double cost);
+  void *stop_user;
 } cf_lsq_options;
 
 void cf_lsq_default_options(cf_lsq_options *options);
@@ -79,6 +84,7 @@ typedef struct cf_lsq_summary {
   char termination[64];
   double seconds;
   double final_radius; /* the trust region at the end */
+  int stopped;         /* options->stop ended it */
 } cf_lsq_summary;
 
 /* Solve (Levenberg-Marquardt, dense normal equations) with an active set

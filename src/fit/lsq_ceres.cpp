@@ -249,6 +249,8 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->parameter_tolerance = 1e-10;
   options->line_search_tolerance = 1e-3;
   options->initial_radius = 1e4;
+  options->stop = nullptr;
+  options->stop_user = nullptr;
 }
 
 namespace {
@@ -257,13 +259,23 @@ namespace {
 // iterations in a row (Ceres clips steps at the box, so "at" is exact).
 class BoundWatcher final : public ceres::IterationCallback {
  public:
-  BoundWatcher(const cf_lsq_problem *problem, const std::vector<int> &active)
-      : problem_(problem), active_(active), streak_(active.size(), 0), hit_(active.size(), 0) {}
+  BoundWatcher(const cf_lsq_problem *problem, const cf_lsq_options *options,
+               const std::vector<int> &active)
+      : problem_(problem),
+        options_(options),
+        active_(active),
+        streak_(active.size(), 0),
+        hit_(active.size(), 0) {}
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary &it) override {
     if (it.step_is_successful || it.iteration == 0) {
       previous_ = current_;
       current_.assign(problem_->x, problem_->x + problem_->num_params);
+    }
+    if (it.step_is_successful && it.iteration > 0 && options_->stop != nullptr &&
+        options_->stop(options_->stop_user, problem_->x, it.cost)) {
+      stopped_ = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
     bool stop = false;
     for (size_t i = 0; i < active_.size(); ++i) {
@@ -284,6 +296,9 @@ class BoundWatcher final : public ceres::IterationCallback {
   const std::vector<int> &hit() const {
     return hit_;
   }
+  bool stopped() const {
+    return stopped_;
+  }
   // x before the last successful step (empty when there was none)
   const std::vector<double> &previous() const {
     return previous_;
@@ -294,7 +309,9 @@ class BoundWatcher final : public ceres::IterationCallback {
 
  private:
   const cf_lsq_problem *problem_;
+  const cf_lsq_options *options_;
   const std::vector<int> &active_;
+  bool stopped_ = false;
   std::vector<int> streak_, hit_;
   std::vector<double> previous_, current_;
 };
@@ -460,8 +477,9 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     std::vector<double> x0(n);
     int extrapolations = 0;
     double radius = options->initial_radius > 0.0 ? options->initial_radius : 1e4;
+    summary->stopped = 0;
     for (int round = 0; round < MAX_ROUNDS;) {
-      BoundWatcher watcher(problem, active);
+      BoundWatcher watcher(problem, options, active);
       int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
       std::copy(problem->x, problem->x + n, x0.begin());
       solve_once(problem, options, active, budget, radius, &watcher, &ceres_summary);
@@ -480,6 +498,10 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       iterations += std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
       seconds += ceres_summary.total_time_in_seconds;
       if (ceres_summary.termination_type == ceres::FAILURE) break;
+      if (watcher.stopped()) {
+        summary->stopped = 1;
+        break;
+      }
       // a chunk ended, or the solve converged: with steps too short, a line
       // search along the last one, and on
       const bool chunk_ended = ceres_summary.termination_type == ceres::NO_CONVERGENCE;
