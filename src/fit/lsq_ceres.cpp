@@ -256,7 +256,15 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
 namespace {
 
 // Stops the solve when a free parameter has sat at a bound for two
-// iterations in a row (Ceres clips steps at the box, so "at" is exact).
+// iterations in a row (Ceres clips steps at the box, so "at" is exact), or
+// is closing in on one: within 1 % of its range of it, and closer on each
+// of three successful steps in a row.
+// The projected line search then shortens every step that the bound would
+// clip, and the parameter never lands on it (measured: an Oren-Nayar σ²
+// from 3e-4 to 2e-6 in 30 iterations, each with a fifth of the predicted
+// decrease). Such a parameter is pinned at the bound, and the Newton test
+// at the end of the round (pinned_by_newton_step) frees it again when its
+// minimum is inside.
 class BoundWatcher final : public ceres::IterationCallback {
  public:
   BoundWatcher(const cf_lsq_problem *problem, const cf_lsq_options *options,
@@ -265,7 +273,10 @@ class BoundWatcher final : public ceres::IterationCallback {
         options_(options),
         active_(active),
         streak_(active.size(), 0),
-        hit_(active.size(), 0) {}
+        hit_(active.size(), 0),
+        approach_(active.size(), 0),
+        distance_(active.size(), 0.0),
+        near_(active.size(), 0) {}
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary &it) override {
     if (it.step_is_successful || it.iteration == 0) {
@@ -283,8 +294,24 @@ class BoundWatcher final : public ceres::IterationCallback {
       int side = side_of(i);
       streak_[i] = side != 0 ? streak_[i] + 1 : 0;
       if (streak_[i] >= 2) hit_[i] = side, stop = true;
+      if (it.step_is_successful && it.iteration > 0 && side == 0 && closing_in(i))
+        hit_[i] = near_[i], stop = true;
     }
     return stop ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+  // Is parameter i closing in on a bound (closer on three successful steps
+  // in a row, now within 1 % of the range)?
+  bool closing_in(size_t i) {
+    const double lower = problem_->lower[i], upper = problem_->upper[i], x = problem_->x[i];
+    if (!std::isfinite(lower) || !std::isfinite(upper)) return false;
+    const int near = x - lower <= upper - x ? -1 : 1;
+    const double distance = near < 0 ? x - lower : upper - x;
+    const bool closer = near == near_[i] && distance < distance_[i];
+    approach_[i] = closer ? approach_[i] + 1 : 0;
+    near_[i] = near;
+    distance_[i] = distance;
+    return approach_[i] >= 3 && distance < 0.01 * (upper - lower);
   }
 
   int side_of(size_t i) const {
@@ -313,6 +340,9 @@ class BoundWatcher final : public ceres::IterationCallback {
   const std::vector<int> &active_;
   bool stopped_ = false;
   std::vector<int> streak_, hit_;
+  std::vector<int> approach_;     // successful steps in a row that came closer
+  std::vector<double> distance_;  // to the nearest bound, at the last successful step
+  std::vector<int> near_;         // which bound that is
   std::vector<double> previous_, current_;
 };
 
@@ -321,6 +351,50 @@ bool gradient_at(const cf_lsq_problem *problem, int threads, std::vector<double>
   gradient->assign(problem->num_params, 0.0);
   double cost;
   return cf_lsq_normal_equations(problem, threads, nullptr, gradient->data(), &cost) != 0;
+}
+
+// Which parameters at a bound (side: −1, +1; 0 for one inside the box)
+// stay pinned there: those the Gauss-Newton step of the problem with the
+// others free would move further out. The gradient's sign alone is not
+// enough where parameters are correlated: it can point into the box while
+// the step, which the others' change drags, points out (measured: an
+// Oren-Nayar σ² at 0 released by its gradient and pushed back by every
+// step, 45 iterations of creeping). The outward ones are pinned and the
+// step solved again for the rest, until none goes out. pinned[i] is side
+// or 0. Returns false when the normal equations cannot be evaluated.
+bool pinned_by_newton_step(const cf_lsq_problem *problem, int threads, const std::vector<int> &side,
+                           std::vector<int> *pinned) {
+  const int n = problem->num_params;
+  std::vector<double> jtj(static_cast<size_t>(n) * n), g(n);
+  double cost;
+  if (!cf_lsq_normal_equations(problem, threads, jtj.data(), g.data(), &cost)) return false;
+  pinned->assign(n, 0);
+  for (;;) {
+    std::vector<int> free_index;
+    for (int i = 0; i < n; ++i)
+      if ((*pinned)[i] == 0) free_index.push_back(i);
+    const int m = static_cast<int>(free_index.size());
+    if (m == 0) return true;
+    Eigen::MatrixXd h(m, m);
+    Eigen::VectorXd rhs(m);
+    double largest = 0.0;
+    for (int a = 0; a < m; ++a) {
+      rhs(a) = -g[free_index[a]];
+      for (int b = 0; b < m; ++b)
+        h(a, b) = jtj[static_cast<size_t>(free_index[a]) * n + free_index[b]];
+      largest = std::max(largest, h(a, a));
+    }
+    // a ridge of 1e-12 of the largest curvature: a direction no data see
+    // does not take the step to infinity
+    h.diagonal().array() += 1e-12 * std::max(largest, 1e-300);
+    const Eigen::VectorXd step = h.ldlt().solve(rhs);
+    bool changed = false;
+    for (int a = 0; a < m; ++a) {
+      const int i = free_index[a];
+      if (side[i] != 0 && side[i] * step(a) > 0.0) (*pinned)[i] = side[i], changed = true;
+    }
+    if (!changed) return true;
+  }
 }
 
 // The total cost at x (NaN when a block cannot be evaluated there), the
@@ -483,8 +557,14 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
       std::copy(problem->x, problem->x + n, x0.begin());
       solve_once(problem, options, active, budget, radius, &watcher, &ceres_summary);
-      if (std::getenv("CLAYFIT_LSQ_TRACE") != nullptr)
+      if (std::getenv("CLAYFIT_LSQ_TRACE") != nullptr) {
         std::printf("chunk of solve: round %d, %s\n", round, ceres_summary.message.c_str());
+        if (std::getenv("CLAYFIT_LSQ_TRACE")[0] == '2' &&
+            gradient_at(problem, options->threads, &gradient))
+          for (int i = 0; i < n; ++i)
+            std::printf("  x[%d] = %.9g in [%g, %g], gradient %.4g, active %d\n", i, problem->x[i],
+                        problem->lower[i], problem->upper[i], gradient[i], active[i]);
+      }
       if (!ceres_summary.iterations.empty())
         radius = ceres_summary.iterations.back().trust_region_radius;
       if (round == 0 && extrapolations == 0 && iterations == 0)
@@ -515,25 +595,28 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       }
       ++round;
       if (watcher.any_hit()) {  // pin and solve the rest
-        for (int i = 0; i < n; ++i)
-          if (watcher.hit()[i] != 0) active[i] = watcher.hit()[i];
+        for (int i = 0; i < n; ++i) {
+          if (watcher.hit()[i] == 0) continue;
+          active[i] = watcher.hit()[i];
+          problem->x[i] = active[i] < 0 ? problem->lower[i] : problem->upper[i];
+        }
         if (iterations < options->max_iterations) continue;
       }
-      // the end of a solve: parameters at a bound join the active set when
-      // the gradient pushes them out, and leave it when it pulls them in
+      // the end of a solve: which parameters at a bound stay there
       // (none at a bound: nothing to decide, and no pass for the gradient)
+      std::vector<int> side(n);
       bool any_at_bound = false;
-      for (int i = 0; i < n; ++i) any_at_bound |= watcher.side_of(static_cast<size_t>(i)) != 0;
+      for (int i = 0; i < n; ++i) {
+        side[i] = watcher.side_of(static_cast<size_t>(i));
+        any_at_bound |= side[i] != 0;
+      }
       if (!any_at_bound) break;
-      if (!gradient_at(problem, options->threads, &gradient)) break;
+      std::vector<int> pinned;
+      if (!pinned_by_newton_step(problem, options->threads, side, &pinned)) break;
       bool released = false;
       for (int i = 0; i < n; ++i) {
-        int side = watcher.side_of(static_cast<size_t>(i));
-        bool outward = side != 0 && side * -gradient[i] > 0.0;  // descent is −g
-        if (active[i] != 0 && !outward)
-          active[i] = 0, released = true;
-        else if (active[i] == 0 && outward)
-          active[i] = side;
+        if (active[i] != 0 && pinned[i] == 0) released = true;
+        active[i] = pinned[i];
       }
       if (!released || iterations >= options->max_iterations) break;
     }
