@@ -300,6 +300,10 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   }
   p.loss = o->loss;
   p.loss_scale = o->loss_scale;
+  /* the pixel footprints at the refined values, which are near the end:
+   * the solves below then see them from the start, and the rounds after
+   * them seldom change anything */
+  if (s == CF_OK) s = fit_footprint_update(&p, capture, o, NULL, err);
   /* with a noise model, weights from the prediction, to their fixed point */
   if (s == CF_OK && has_noise)
     s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, err);
@@ -312,6 +316,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     s = fit_footprint_update(&p, capture, o, &changed, err);
     if (s != CF_OK || !changed) break;
     fit_progress(o, "integrating pixel footprints", (size_t)round, FOOTPRINT_ROUNDS);
+    double decrement; /* samples that move nothing need no solve */
+    s = fit_newton_decrement(&p, o, &decrement, err);
+    if (s != CF_OK || decrement < FIT_RESOLVE_DECREMENT) break;
     s = fit_solve(&p, o, o->max_iterations, &summary, err);
     if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
   }

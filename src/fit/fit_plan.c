@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "lsq.h"
+#include "symmetric_eigen.h"
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights
  * are known only up to a factor (MODEL.md, "relative radiometry"), or −1. */
@@ -87,6 +88,37 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   return s;
 }
 
+cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
+                               cf_error *err) {
+  enum { MOST = 64 };
+  int n = p->num_unknowns;
+  *decrement = HUGE_VAL;
+  if (n > MOST) return CF_OK;
+  double x[FIT_MAX_FREE], jtj[MOST * MOST], g[MOST], h[MOST * MOST], values[MOST],
+      vectors[MOST * MOST], cost;
+  fit_problem_get_x(p, x);
+  cf_lsq_problem problem;
+  fit_lsq_problem(p, x, &problem);
+  if (!cf_lsq_normal_equations(&problem, o->threads > 0 ? o->threads : 2, jtj, g, &cost))
+    return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
+  int free_u[MOST], m = 0;
+  for (int u = 0; u < n; ++u)
+    if (!p->at_bound[u]) free_u[m++] = u;
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b) h[a * m + b] = jtj[free_u[a] * n + free_u[b]];
+  symmetric_eigen(h, m, values, vectors);
+  double largest = 0.0, sum = 0.0;
+  for (int i = 0; i < m; ++i) largest = fmax(largest, values[i]);
+  for (int i = 0; i < m; ++i) {
+    if (!(values[i] > 1e-12 * largest)) continue; /* a direction no data see */
+    double projection = 0.0;
+    for (int a = 0; a < m; ++a) projection += vectors[a * m + i] * g[free_u[a]];
+    sum += projection * projection / values[i];
+  }
+  *decrement = 0.5 * sum;
+  return CF_OK;
+}
+
 /* With a noise model, σ from the prediction (fit_problem_reweight) and
  * solve again, to the fixed point (the largest change in a model slot
  * below 1e-7 of its range's width, or `rounds` rounds); without one, one
@@ -96,9 +128,12 @@ cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const 
   if (!fit_capture_has_noise(capture)) return fit_solve(p, o, o->max_iterations, summary, err);
   cf_status s = CF_OK;
   for (int round = 0; s == CF_OK && round < rounds; ++round) {
-    double before[CF_MAX_DIM];
+    double before[CF_MAX_DIM], decrement = HUGE_VAL;
     memcpy(before, p->params, sizeof before);
     s = fit_problem_reweight(p, capture, err);
+    /* after the first solve, new weights that move nothing end it */
+    if (s == CF_OK && round > 0) s = fit_newton_decrement(p, o, &decrement, err);
+    if (s == CF_OK && decrement < FIT_RESOLVE_DECREMENT) break;
     if (s == CF_OK) s = fit_solve(p, o, o->max_iterations, summary, err);
     double change = 0.0;
     for (int k = 0; k < p->dim; ++k)

@@ -42,6 +42,18 @@ void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem);
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err);
 
+/* How much a solve from the current values could still lower the cost:
+ * the Gauss-Newton decrement ½ gᵀ H⁻¹ g over the unknowns not pinned at a
+ * bound (in the cost's units, σ²: 1e-3 is a move of 0.045 standard
+ * deviations along the worst direction). *decrement is HUGE_VAL where it
+ * is not worth computing (more than 64 unknowns). */
+cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
+                               cf_error *err);
+
+/* Below this decrement a change of the problem (new weights, new pixel
+ * footprints) is not solved again. */
+#define FIT_RESOLVE_DECREMENT 1e-3
+
 /* With a noise model, σ from the prediction (fit_problem_reweight) and
  * solve again, to the fixed point or `rounds` rounds; without one, one
  * solve. */
