@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "core/clock.h"
+#include "fit_parallel.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
@@ -69,25 +70,43 @@ static void split_free(choice_split *split) {
   free(split->test);
 }
 
-/* Fit every candidate to the training part. */
+/* Fit every candidate to the training part: side by side, each on one
+ * thread, when the options give two threads or more (the candidates are
+ * independent; a fit's result does not depend on its threads beyond the
+ * order of its sums). */
+typedef struct candidate_work {
+  const cf_capture *capture;
+  const cf_fit_options *options;
+  const fit_population *train;
+  cf_fit_choice *choice;
+  int side_by_side;
+} candidate_work;
+
+static void fit_candidate(void *user, int i) {
+  candidate_work *w = user;
+  int m = CF_MODEL_COUNT - 1 - i; /* the richest, slowest first */
+  cf_fit_candidate *c = &w->choice->candidate[m];
+  c->model = (cf_model_id)m;
+  cf_fit_options o = w->options[m];
+  o.model = (cf_model_id)m;
+  o.progress = NULL;
+  if (w->side_by_side) o.threads = 1;
+  cf_error err = {0};
+  double clock = cf_now_seconds();
+  cf_status s = fit_run_population(w->capture, w->train, &o, &c->fit, &err);
+  c->seconds = cf_now_seconds() - clock;
+  c->ok = s == CF_OK;
+  if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
+}
+
 static void fit_candidates(const cf_capture *capture, const cf_fit_options options[],
                            const fit_population *train, cf_fit_choice *choice) {
   const cf_fit_options *first = &options[0];
-  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
-    cf_fit_candidate *c = &choice->candidate[m];
-    c->model = (cf_model_id)m;
-    if (first->progress)
-      first->progress(first->progress_user, "choosing the model", (size_t)m, CF_MODEL_COUNT);
-    cf_fit_options o = options[m];
-    o.model = (cf_model_id)m;
-    o.progress = NULL;
-    cf_error err = {0};
-    double clock = cf_now_seconds();
-    cf_status s = fit_run_population(capture, train, &o, &c->fit, &err);
-    c->seconds = cf_now_seconds() - clock;
-    c->ok = s == CF_OK;
-    if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
-  }
+  int threads = first->threads > 0 ? first->threads : 2;
+  candidate_work work = {capture, options, train, choice, threads >= 2};
+  if (first->progress)
+    first->progress(first->progress_user, "choosing the model", 0, CF_MODEL_COUNT);
+  fit_parallel_for(CF_MODEL_COUNT, threads, fit_candidate, &work);
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", CF_MODEL_COUNT, CF_MODEL_COUNT);
   choice->count = CF_MODEL_COUNT;

@@ -1,0 +1,37 @@
+/* Independent pieces of a fit side by side (fit_parallel.h). */
+#include "fit_parallel.h"
+
+#include <pthread.h>
+
+enum { MOST_THREADS = 16 };
+
+typedef struct parallel_for {
+  int count, next;
+  void (*work)(void *user, int i);
+  void *user;
+  pthread_mutex_t lock;
+} parallel_for;
+
+static void *worker(void *arg) {
+  parallel_for *f = arg;
+  for (;;) {
+    pthread_mutex_lock(&f->lock);
+    int i = f->next < f->count ? f->next++ : -1;
+    pthread_mutex_unlock(&f->lock);
+    if (i < 0) return NULL;
+    f->work(f->user, i);
+  }
+}
+
+void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user) {
+  parallel_for f = {count, 0, work, user, PTHREAD_MUTEX_INITIALIZER};
+  if (threads > MOST_THREADS) threads = MOST_THREADS;
+  if (threads > count) threads = count;
+  pthread_t pool[MOST_THREADS];
+  int started = 0;
+  for (; started + 1 < threads; ++started) /* this thread is the last worker */
+    if (pthread_create(&pool[started], NULL, worker, &f) != 0) break;
+  worker(&f);
+  for (int t = 0; t < started; ++t) pthread_join(pool[t], NULL);
+  pthread_mutex_destroy(&f.lock);
+}

@@ -1,0 +1,12 @@
+/* Independent pieces of a fit run side by side (the model ladder's
+ * candidates): `count` calls work(user, i), on up to `threads` threads,
+ * each i exactly once; returns when all are done. Each call must touch
+ * only what is its own (results go to slot i). With threads <= 1, or when
+ * no thread can be started, the calls run here in order. Private to
+ * src/fit. */
+#ifndef CLAYFIT_FIT_PARALLEL_H
+#define CLAYFIT_FIT_PARALLEL_H
+
+void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user);
+
+#endif /* CLAYFIT_FIT_PARALLEL_H */
