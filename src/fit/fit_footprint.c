@@ -51,9 +51,8 @@ static double pixel_turn(const cf_capture *capture, size_t k, double fallback, d
 }
 
 /* The S each observation wants (only growing from `current`). */
-static cf_status choose_samples(const fit_problem *p, const cf_capture *capture,
-                                const cf_fit_options *o, const int *current, int *samples,
-                                cf_error *err) {
+static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
+                                const int *current, int *samples, cf_error *err) {
   for (size_t i = 0; i < p->count; ++i) samples[i] = current ? current[i] : 1;
   if (o->footprint == 1) {
     for (size_t i = 0; i < p->count; ++i) samples[i] = 1;
@@ -65,13 +64,19 @@ static cf_status choose_samples(const fit_problem *p, const cf_capture *capture,
   }
   double width = cf_model_lobe_width(p->model, p->params);
   if (isinf(width)) return CF_OK;
-  double *bound, *scratch = malloc(6 * (size_t)p->lights * sizeof *scratch);
-  cf_status s =
-      scratch ? turn_bounds(capture, &bound, err) : cf_error_set(err, CF_ENOMEM, "out of memory");
+  double *scratch = malloc(6 * (size_t)p->lights * sizeof *scratch);
+  cf_status s = scratch ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK && !p->turn_bound) s = turn_bounds(capture, &p->turn_bound, err);
+  if (s == CF_OK && !p->pixel_turn) { /* measured as first needed */
+    p->pixel_turn = malloc((p->count ? p->count : 1) * sizeof *p->pixel_turn);
+    if (!p->pixel_turn) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+    for (size_t i = 0; s == CF_OK && i < p->count; ++i) p->pixel_turn[i] = NAN;
+  }
   if (s != CF_OK) {
     free(scratch);
     return s;
   }
+  const double *bound = p->turn_bound;
   /* S > 1 needs width² + θ² < 5 δ² / (3 tol) (cf_footprint_samples) */
   double reach = sqrt(5.0 / (3.0 * o->footprint_tolerance)) + 0.5 * sqrt(2.0);
   for (size_t i = 0; i < p->count; ++i) {
@@ -80,12 +85,13 @@ static cf_status choose_samples(const fit_problem *p, const cf_capture *capture,
     if (cos_h <= -1.0) continue; /* unlit */
     double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
     if (theta_h >= reach * delta_max) continue;
-    double delta = pixel_turn(capture, k, delta_max, scratch, p->lights);
+    if (isnan(p->pixel_turn[i]))
+      p->pixel_turn[i] = pixel_turn(capture, k, delta_max, scratch, p->lights);
+    double delta = p->pixel_turn[i];
     int want = cf_footprint_samples(width, delta, theta_h, o->footprint_tolerance,
                                     CF_FIT_FOOTPRINT_MAX_SAMPLES);
     if (want > samples[i]) samples[i] = want;
   }
-  free(bound);
   free(scratch);
   return CF_OK;
 }

@@ -144,6 +144,8 @@ void fit_problem_release(fit_problem *p) {
   free(p->sample_root);
   free(p->slot_begin);
   free(p->samples);
+  free(p->turn_bound);
+  free(p->pixel_turn);
   free(p->y);
   free(p->image);
   free(p->flags);

@@ -72,9 +72,13 @@ typedef struct fit_problem {
   cf_geometry *geometry; /* slots */
   double *weight;        /* slots × 3: E_c c_i (0 when unlit), over S² */
   int *samples;          /* count: S of each observation, or NULL (all 1) */
-  double *inv_sigma;     /* count × 3; from the noise model, or 1 */
-  double *sample_root;   /* count: √(sample weight), or NULL (all 1) */
-  double sigma;          /* one σ for all (no noise model), else 0 */
+  /* what the footprints measure once (fit_footprint.c; they do not depend
+   * on the parameters): per image a bound on the normal's turn across a
+   * pixel, and per observation its turn (NaN until measured); NULL before */
+  double *turn_bound, *pixel_turn;
+  double *inv_sigma;   /* count × 3; from the noise model, or 1 */
+  double *sample_root; /* count: √(sample weight), or NULL (all 1) */
+  double sigma;        /* one σ for all (no noise model), else 0 */
   size_t images;
   uint32_t last_image; /* images − 1 */
 

@@ -23,6 +23,37 @@
 
 namespace {
 
+// The last evaluation of one block: x, its cost and, when `normal`, its
+// normal equations over the block's k columns. One solve keeps one per
+// block across its chunks, so that a chunk's first Jacobian, the Newton
+// test of the bounds and a Jacobian after a cost at the same point are
+// not evaluated again. Ceres evaluates a block from one thread at a time.
+struct BlockCache {
+  bool valid = false, normal = false;
+  std::vector<double> x, jtj, jtu;
+  double cost = 0.0;
+
+  // The block at x, from the cache or evaluated into it (the normal
+  // equations too when `normal`).
+  bool at(const cf_lsq_problem *problem, size_t block, int k, const double *point,
+          bool want_normal) {
+    const int n = problem->num_params;
+    if (valid && (normal || !want_normal) && std::equal(point, point + n, x.begin())) return true;
+    valid = false;
+    if (want_normal) {
+      jtj.resize(static_cast<size_t>(k) * k);
+      jtu.resize(k);
+    }
+    if (!problem->evaluate(problem->user, point, block, &cost, want_normal ? jtj.data() : nullptr,
+                           want_normal ? jtu.data() : nullptr))
+      return false;
+    x.assign(point, point + n);
+    normal = want_normal;
+    valid = true;
+    return true;
+  }
+};
+
 // One residual block of the C problem, compressed (lsq.h): k + 1
 // residuals (c, d) with the Jacobian (R; 0) in the block's k columns, from
 // the block's normal equations.
@@ -37,7 +68,8 @@ constexpr int SPECULATE_COLUMNS = 128;
 
 class BlockCost final : public ceres::CostFunction {
  public:
-  BlockCost(const cf_lsq_problem *problem, size_t block) : problem_(problem), block_(block) {
+  BlockCost(const cf_lsq_problem *problem, size_t block, BlockCache *cache)
+      : problem_(problem), block_(block), cache_(cache) {
     const int *columns = nullptr;
     const int k = problem->block_columns(problem->user, block, &columns);
     columns_.assign(columns, columns + k);
@@ -50,16 +82,15 @@ class BlockCost final : public ceres::CostFunction {
     double *jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
     const int n = problem_->num_params, k = static_cast<int>(columns_.size());
     const double *x = parameters[0];
-    const bool hit = cached_ && std::equal(x, x + n, cached_x_.begin());
     if (jacobian == nullptr) {  // the cost alone: (0, …, 0, √(2C))
-      if (!hit && !evaluate(x, k <= SPECULATE_COLUMNS)) return false;
+      if (!cache_->at(problem_, block_, k, x, k <= SPECULATE_COLUMNS)) return false;
       std::fill(residuals, residuals + k, 0.0);
-      residuals[k] = std::sqrt(2.0 * cached_cost_);
+      residuals[k] = std::sqrt(2.0 * cache_->cost);
       return true;
     }
-    if (!(hit && cached_normal_) && !evaluate(x, true)) return false;
-    const double cost = cached_cost_;
-    const std::vector<double> &jtj_storage = cached_jtj_, &jtu_storage = cached_jtu_;
+    if (!cache_->at(problem_, block_, k, x, true)) return false;
+    const double cost = cache_->cost;
+    const std::vector<double> &jtj_storage = cache_->jtj, &jtu_storage = cache_->jtu;
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     Eigen::Map<const RowMajor> jtj(jtj_storage.data(), k, k);
     Eigen::Map<const Eigen::VectorXd> jtu(jtu_storage.data(), k);
@@ -83,32 +114,10 @@ class BlockCost final : public ceres::CostFunction {
   }
 
  private:
-  // The block at x into the cache: its cost, and its normal equations when
-  // `normal`.
-  bool evaluate(const double *x, bool normal) const {
-    const size_t k = columns_.size();
-    cached_ = false;
-    if (normal) {
-      cached_jtj_.resize(k * k);
-      cached_jtu_.resize(k);
-    }
-    if (!problem_->evaluate(problem_->user, x, block_, &cached_cost_,
-                            normal ? cached_jtj_.data() : nullptr,
-                            normal ? cached_jtu_.data() : nullptr))
-      return false;
-    cached_x_.assign(x, x + problem_->num_params);
-    cached_normal_ = normal;
-    cached_ = true;
-    return true;
-  }
-
   const cf_lsq_problem *problem_;
   size_t block_;
+  BlockCache *cache_;
   std::vector<int> columns_;
-  // the last evaluation (Ceres evaluates a block from one thread at a time)
-  mutable bool cached_ = false, cached_normal_ = false;
-  mutable std::vector<double> cached_x_, cached_jtj_, cached_jtu_;
-  mutable double cached_cost_ = 0.0;
 };
 
 // r = R (x − x0): a residual block whose Jacobian is the factor R.
@@ -150,8 +159,12 @@ void copy_termination(const ceres::Solver::Summary &s, cf_lsq_summary *out) {
 
 }  // namespace
 
-extern "C" int cf_lsq_normal_equations(const cf_lsq_problem *problem, int threads, double *jtj,
-                                       double *jtu, double *cost) {
+namespace {
+
+// cf_lsq_normal_equations, from the blocks' caches where they hold x
+// (caches: one per block, or nullptr).
+int normal_equations(const cf_lsq_problem *problem, int threads, std::vector<BlockCache> *caches,
+                     double *jtj, double *jtu, double *cost) {
   const int n = problem->num_params;
   const size_t count = static_cast<size_t>(std::max(1, threads));
   std::vector<std::vector<double>> sum_jtj(count), sum_jtu(count);
@@ -166,21 +179,20 @@ extern "C" int cf_lsq_normal_equations(const cf_lsq_problem *problem, int thread
     }
   };
   accumulate = [&](size_t t) {
-    std::vector<double> block_jtj, block_jtu;
+    BlockCache scratch;
     if (jtj) sum_jtj[t].assign(static_cast<size_t>(n) * n, 0.0);
     sum_jtu[t].assign(n, 0.0);
     for (size_t b = t; b < problem->num_blocks && ok[t]; b += count) {
       const int *columns = nullptr;
       const int k = problem->block_columns(problem->user, b, &columns);
-      block_jtj.resize(static_cast<size_t>(k) * k);
-      block_jtu.resize(k);
-      double block_cost;
-      if (!problem->evaluate(problem->user, problem->x, b, &block_cost, block_jtj.data(),
-                             block_jtu.data())) {
+      scratch.valid = false;  // it held another block
+      BlockCache &cache = caches != nullptr ? (*caches)[b] : scratch;
+      if (!cache.at(problem, b, k, problem->x, true)) {
         ok[t] = 0;
         break;
       }
-      sum_cost[t] += block_cost;
+      const std::vector<double> &block_jtj = cache.jtj, &block_jtu = cache.jtu;
+      sum_cost[t] += cache.cost;
       for (int a = 0; a < k; ++a) {
         sum_jtu[t][columns[a]] += block_jtu[a];
         if (!jtj) continue;
@@ -212,6 +224,13 @@ extern "C" int cf_lsq_normal_equations(const cf_lsq_problem *problem, int thread
     }
   }
   return 1;
+}
+
+}  // namespace
+
+extern "C" int cf_lsq_normal_equations(const cf_lsq_problem *problem, int threads, double *jtj,
+                                       double *jtu, double *cost) {
+  return normal_equations(problem, threads, nullptr, jtj, jtu, cost);
 }
 
 extern "C" cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance,
@@ -374,12 +393,13 @@ bool gradient_at(const cf_lsq_problem *problem, int threads, std::vector<double>
 // step, 45 iterations of creeping). The outward ones are pinned and the
 // step solved again for the rest, until none goes out. pinned[i] is side
 // or 0. Returns false when the normal equations cannot be evaluated.
-bool pinned_by_newton_step(const cf_lsq_problem *problem, int threads, const std::vector<int> &side,
+bool pinned_by_newton_step(const cf_lsq_problem *problem, int threads,
+                           std::vector<BlockCache> *caches, const std::vector<int> &side,
                            std::vector<int> *pinned) {
   const int n = problem->num_params;
   std::vector<double> jtj(static_cast<size_t>(n) * n), g(n);
   double cost;
-  if (!cf_lsq_normal_equations(problem, threads, jtj.data(), g.data(), &cost)) return false;
+  if (!normal_equations(problem, threads, caches, jtj.data(), g.data(), &cost)) return false;
   pinned->assign(n, 0);
   for (;;) {
     std::vector<int> free_index;
@@ -495,14 +515,15 @@ bool extrapolate(cf_lsq_problem *problem, const std::vector<double> &x0, double 
 // One Ceres solve with the parameters flagged in `active` held.
 void solve_once(cf_lsq_problem *problem, const cf_lsq_options *options,
                 const std::vector<int> &active, int max_iterations, double radius,
-                BoundWatcher *watcher, ceres::Solver::Summary *summary) {
+                std::vector<BlockCache> *caches, BoundWatcher *watcher,
+                ceres::Solver::Summary *summary) {
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem ceres_problem(problem_options);
   ceres_problem.AddParameterBlock(problem->x, problem->num_params);
   for (size_t b = 0; b < problem->num_blocks; ++b)
-    ceres_problem.AddResidualBlock(new BlockCost(problem, b), nullptr, problem->x);
+    ceres_problem.AddResidualBlock(new BlockCost(problem, b, &(*caches)[b]), nullptr, problem->x);
   for (int i = 0; i < problem->num_params; ++i) {
     if (std::isfinite(problem->lower[i]))
       ceres_problem.SetParameterLowerBound(problem->x, i, problem->lower[i]);
@@ -563,12 +584,13 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     std::vector<double> x0(n);
     int extrapolations = 0;
     double radius = options->initial_radius > 0.0 ? options->initial_radius : 1e4;
+    std::vector<BlockCache> caches(problem->num_blocks);
     summary->stopped = 0;
     for (int round = 0; round < MAX_ROUNDS;) {
       BoundWatcher watcher(problem, options, active);
       int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
       std::copy(problem->x, problem->x + n, x0.begin());
-      solve_once(problem, options, active, budget, radius, &watcher, &ceres_summary);
+      solve_once(problem, options, active, budget, radius, &caches, &watcher, &ceres_summary);
       if (std::getenv("CLAYFIT_LSQ_TRACE") != nullptr) {
         std::printf("chunk of solve: round %d, %s\n", round, ceres_summary.message.c_str());
         if (std::getenv("CLAYFIT_LSQ_TRACE")[0] == '2' &&
@@ -624,7 +646,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       }
       if (!any_at_bound) break;
       std::vector<int> pinned;
-      if (!pinned_by_newton_step(problem, options->threads, side, &pinned)) break;
+      if (!pinned_by_newton_step(problem, options->threads, &caches, side, &pinned)) break;
       bool released = false;
       for (int i = 0; i < n; ++i) {
         if (active[i] != 0 && pinned[i] == 0) released = true;
