@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fit_parallel.h"
 #include "fit_residuals.h"
 #include "fit_starts.h"
 #include "lsq.h"
@@ -111,40 +112,85 @@ static int reached_earlier_end(void *user, const double *x, double cost) {
   return 0;
 }
 
+/* One start, on a copy of the subsample's problem with its own values
+ * (the copy shares the problem's arrays, which a solve only reads, but for
+ * the exposures, which it writes). */
+typedef struct start_job {
+  fit_problem problem;
+  cf_fit_options options;
+  cf_lsq_summary summary;
+  cf_status status;
+  cf_error err;
+} start_job;
+
+static void run_job(void *user, int i) {
+  start_job *job = &((start_job *)user)[i];
+  job->status = fit_solve(&job->problem, &job->options, START_ITERATIONS, &job->summary, &job->err);
+}
+
 /* Run `count` starts of `model` on the problem to convergence (or to an
- * earlier start's minimum); the best is r->start[r->best_start]. */
+ * earlier start's minimum); the best is r->start[r->best_start]. With two
+ * threads or more the starts run in batches of that many side by side,
+ * each on one thread; a start compares itself with the minima of the
+ * batches before its own only, so the result does not depend on which
+ * finishes first. */
 static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit_plan *plan,
                             double (*starts)[CF_MAX_DIM], int count, double log_scale,
                             cf_fit_result *r, double *log_scales, cf_error *err) {
   cf_status s = fit_declare(sub, plan, err);
   sub->function_tolerance = START_TOLERANCE;
+  int width = o->threads >= 2 ? (o->threads < count ? o->threads : count) : 1;
+  if (width < 1) width = 1;
   earlier_ends ends = {sub, NULL, 0};
+  start_job *jobs = s == CF_OK ? calloc((size_t)width, sizeof *jobs) : NULL;
+  if (s == CF_OK && !jobs) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (int j = 0; s == CF_OK && j < width; ++j)
+    if (!(jobs[j].problem.log_exposures = malloc((sub->images ? sub->images : 1) * sizeof(double))))
+      s = cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK && !(ends.x = malloc((size_t)count * (size_t)sub->num_unknowns * sizeof *ends.x)))
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
   sub->stop = reached_earlier_end;
   sub->stop_user = &ends;
   r->starts = 0;
   r->best_start = 0;
-  for (int i = 0; s == CF_OK && i < count; ++i) {
+  for (int i = 0; s == CF_OK && i < count; i += width) {
     fit_progress(o, "multi-start", (size_t)i, (size_t)count);
-    memcpy(sub->params, starts[i], sizeof starts[i]);
-    sub->log_scale = log_scale;
-    sub->radius = 0.0; /* a start far from the last one's end */
-    cf_lsq_summary summary;
-    s = fit_solve(sub, o, START_ITERATIONS, &summary, err);
-    if (s != CF_OK) break;
-    cf_fit_start *start = &r->start[r->starts++];
-    memcpy(start->start, starts[i], sizeof starts[i]);
-    memcpy(start->end, sub->params, sizeof sub->params);
-    start->cost = summary.final_cost;
-    start->iterations = summary.iterations;
-    log_scales[i] = sub->log_scale;
-    if (start->cost < r->start[r->best_start].cost) r->best_start = i;
-    if (!summary.stopped)
-      fit_problem_get_x(sub, ends.x + (size_t)ends.count++ * (size_t)sub->num_unknowns);
+    int batch = count - i < width ? count - i : width;
+    for (int j = 0; j < batch; ++j) {
+      start_job *job = &jobs[j];
+      double *exposures = job->problem.log_exposures;
+      job->problem = *sub;
+      job->problem.log_exposures = exposures;
+      memcpy(exposures, sub->log_exposures, sub->images * sizeof *exposures);
+      memcpy(job->problem.params, starts[i + j], sizeof starts[i + j]);
+      job->problem.log_scale = log_scale;
+      job->problem.radius = 0.0; /* a start far from the last one's end */
+      job->options = *o;
+      if (width > 1) job->options.threads = 1;
+    }
+    fit_parallel_for(batch, width, run_job, jobs);
+    for (int j = 0; s == CF_OK && j < batch; ++j) { /* in the starts' order */
+      start_job *job = &jobs[j];
+      if (job->status != CF_OK) {
+        *err = job->err;
+        s = job->status;
+        break;
+      }
+      cf_fit_start *start = &r->start[r->starts++];
+      memcpy(start->start, starts[i + j], sizeof starts[i + j]);
+      memcpy(start->end, job->problem.params, sizeof job->problem.params);
+      start->cost = job->summary.final_cost;
+      start->iterations = job->summary.iterations;
+      log_scales[i + j] = job->problem.log_scale;
+      if (start->cost < r->start[r->best_start].cost) r->best_start = i + j;
+      if (!job->summary.stopped)
+        fit_problem_get_x(&job->problem, ends.x + (size_t)ends.count++ * (size_t)sub->num_unknowns);
+    }
   }
   sub->stop = NULL;
   sub->stop_user = NULL;
+  for (int j = 0; jobs && j < width; ++j) free(jobs[j].problem.log_exposures);
+  free(jobs);
   free(ends.x);
   fit_progress(o, "multi-start", (size_t)count, (size_t)count);
   return s;

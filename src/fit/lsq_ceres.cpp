@@ -294,7 +294,7 @@ namespace {
 // clip, and the parameter never lands on it (measured: an Oren-Nayar σ²
 // from 3e-4 to 2e-6 in 30 iterations, each with a fifth of the predicted
 // decrease). Such a parameter is pinned at the bound, and the Newton test
-// at the end of the round (pinned_by_newton_step) frees it again when its
+// at the end of the round (pinned_at_bounds) frees it again when its
 // minimum is inside.
 class BoundWatcher final : public ceres::IterationCallback {
  public:
@@ -385,22 +385,28 @@ bool gradient_at(const cf_lsq_problem *problem, int threads, std::vector<double>
 }
 
 // Which parameters at a bound (side: −1, +1; 0 for one inside the box)
-// stay pinned there: those the Gauss-Newton step of the problem with the
-// others free would move further out. The gradient's sign alone is not
-// enough where parameters are correlated: it can point into the box while
-// the step, which the others' change drags, points out (measured: an
-// Oren-Nayar σ² at 0 released by its gradient and pushed back by every
-// step, 45 iterations of creeping). The outward ones are pinned and the
-// step solved again for the rest, until none goes out. pinned[i] is side
-// or 0. Returns false when the normal equations cannot be evaluated.
-bool pinned_by_newton_step(const cf_lsq_problem *problem, int threads,
-                           std::vector<BlockCache> *caches, const std::vector<int> &side,
-                           std::vector<int> *pinned) {
+// stay pinned there. The first time in a solve, by the gradient: pinned
+// when it points out of the box, freed when it points in (far from the
+// minimum the Gauss-Newton step is no guide: a start whose optical depth
+// hit 0 on its way stayed there, 2 % above the true minimum). A parameter
+// freed once and back at the bound is then decided by the Gauss-Newton
+// step of the problem with it free: pinned when the step, which the other
+// parameters' change drags, moves it further out, even with a gradient
+// that points in (measured: an Oren-Nayar σ² at 0, freed by its gradient
+// and pushed back by every step, 45 iterations of creeping). The outward
+// ones are pinned and the step solved again for the rest, until none goes
+// out. pinned[i] is side or 0. Returns false when the normal equations
+// cannot be evaluated.
+bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<BlockCache> *caches,
+                      const std::vector<int> &side, const std::vector<int> &freed_before,
+                      std::vector<int> *pinned) {
   const int n = problem->num_params;
   std::vector<double> jtj(static_cast<size_t>(n) * n), g(n);
   double cost;
   if (!normal_equations(problem, threads, caches, jtj.data(), g.data(), &cost)) return false;
   pinned->assign(n, 0);
+  for (int i = 0; i < n; ++i)  // the gradient's decisions (descent is −g)
+    if (side[i] != 0 && !freed_before[i] && side[i] * -g[i] > 0.0) (*pinned)[i] = side[i];
   for (;;) {
     std::vector<int> free_index;
     for (int i = 0; i < n; ++i)
@@ -423,7 +429,8 @@ bool pinned_by_newton_step(const cf_lsq_problem *problem, int threads,
     bool changed = false;
     for (int a = 0; a < m; ++a) {
       const int i = free_index[a];
-      if (side[i] != 0 && side[i] * step(a) > 0.0) (*pinned)[i] = side[i], changed = true;
+      if (side[i] != 0 && freed_before[i] && side[i] * step(a) > 0.0)
+        (*pinned)[i] = side[i], changed = true;
     }
     if (!changed) return true;
   }
@@ -585,6 +592,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     int extrapolations = 0;
     double radius = options->initial_radius > 0.0 ? options->initial_radius : 1e4;
     std::vector<BlockCache> caches(problem->num_blocks);
+    std::vector<int> freed(n, 0);  // freed from a bound once in this solve
     summary->stopped = 0;
     for (int round = 0; round < MAX_ROUNDS;) {
       BoundWatcher watcher(problem, options, active);
@@ -646,10 +654,10 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       }
       if (!any_at_bound) break;
       std::vector<int> pinned;
-      if (!pinned_by_newton_step(problem, options->threads, &caches, side, &pinned)) break;
+      if (!pinned_at_bounds(problem, options->threads, &caches, side, freed, &pinned)) break;
       bool released = false;
       for (int i = 0; i < n; ++i) {
-        if (active[i] != 0 && pinned[i] == 0) released = true;
+        if (active[i] != 0 && pinned[i] == 0) released = true, freed[i] = 1;
         active[i] = pinned[i];
       }
       if (!released || iterations >= options->max_iterations) break;
