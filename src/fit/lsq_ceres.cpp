@@ -297,11 +297,18 @@ namespace {
 // minimum is inside.
 class BoundWatcher final : public ceres::IterationCallback {
  public:
+  // A parameter is pinned for closing in at most twice a solve: when the
+  // Newton step frees it twice, it is believed, and the poor steps are left
+  // to converge as they can.
+  static constexpr int MAX_CLOSINGS = 2;
+
   BoundWatcher(const cf_lsq_problem *problem, const cf_lsq_options *options,
-               const std::vector<int> &active)
+               const std::vector<int> &active, const std::vector<int> &closings)
       : problem_(problem),
         options_(options),
         active_(active),
+        closings_(closings),
+        closed_(active.size(), 0),
         streak_(active.size(), 0),
         hit_(active.size(), 0),
         approach_(active.size(), 0),
@@ -325,8 +332,8 @@ class BoundWatcher final : public ceres::IterationCallback {
       streak_[i] = side != 0 ? streak_[i] + 1 : 0;
       if (streak_[i] >= 2) hit_[i] = side, stop = true;
       if (it.step_is_successful && it.iteration > 0 && side == 0 &&
-          closing_in(i, it.relative_decrease))
-        hit_[i] = near_[i], stop = true;
+          closing_in(i, it.relative_decrease) && closings_[i] < MAX_CLOSINGS)
+        hit_[i] = near_[i], closed_[i] = 1, stop = true;
     }
     return stop ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
   }
@@ -362,6 +369,10 @@ class BoundWatcher final : public ceres::IterationCallback {
   bool stopped() const {
     return stopped_;
   }
+  // 1 for a parameter pinned for closing in on its bound
+  const std::vector<int> &closed() const {
+    return closed_;
+  }
   // x before the last successful step (empty when there was none)
   const std::vector<double> &previous() const {
     return previous_;
@@ -374,6 +385,8 @@ class BoundWatcher final : public ceres::IterationCallback {
   const cf_lsq_problem *problem_;
   const cf_lsq_options *options_;
   const std::vector<int> &active_;
+  const std::vector<int> &closings_;  // times each was pinned for closing in
+  std::vector<int> closed_;
   bool stopped_ = false;
   std::vector<int> streak_, hit_;
   std::vector<int> approach_;     // successful steps in a row that came closer
@@ -390,20 +403,21 @@ bool gradient_at(const cf_lsq_problem *problem, int threads, std::vector<double>
 }
 
 // Which parameters at a bound (side: −1, +1; 0 for one inside the box)
-// stay pinned there. The first time in a solve, by the gradient: pinned
-// when it points out of the box, freed when it points in (far from the
-// minimum the Gauss-Newton step is no guide: a start whose optical depth
-// hit 0 on its way stayed there, 2 % above the true minimum). A parameter
-// freed once and back at the bound is then decided by the Gauss-Newton
-// step of the problem with it free: pinned when the step, which the other
-// parameters' change drags, moves it further out, even with a gradient
-// that points in (measured: an Oren-Nayar σ² at 0, freed by its gradient
-// and pushed back by every step, 45 iterations of creeping). The outward
-// ones are pinned and the step solved again for the rest, until none goes
-// out. pinned[i] is side or 0. Returns false when the normal equations
-// cannot be evaluated.
+// stay pinned there. One that hit the bound on its way, the first time in
+// a solve, by its gradient: pinned when it points out of the box, freed
+// when it points in (far from the minimum the Gauss-Newton step is no
+// guide: a start whose optical depth hit 0 on its way stayed there, 2 %
+// above the true minimum). One freed before, or pinned for closing in with
+// poor steps (by_newton), by the Gauss-Newton step of the problem with it
+// free: pinned when the step, which the other parameters' change drags,
+// moves it further out, even with a gradient that points in (measured: an
+// Oren-Nayar σ² at 0, freed by its gradient and pushed back by every step,
+// 45 iterations of creeping; DiLiGenT's optical depths, 89 iterations for
+// 18). The outward ones are pinned and the step solved again for the
+// rest, until none goes out. pinned[i] is side or 0. Returns false when
+// the normal equations cannot be evaluated.
 bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<BlockCache> *caches,
-                      const std::vector<int> &side, const std::vector<int> &freed_before,
+                      const std::vector<int> &side, const std::vector<int> &by_newton,
                       std::vector<int> *pinned) {
   const int n = problem->num_params;
   std::vector<double> jtj(static_cast<size_t>(n) * n), g(n);
@@ -411,7 +425,7 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
   if (!normal_equations(problem, threads, caches, jtj.data(), g.data(), &cost)) return false;
   pinned->assign(n, 0);
   for (int i = 0; i < n; ++i)  // the gradient's decisions (descent is −g)
-    if (side[i] != 0 && !freed_before[i] && side[i] * -g[i] > 0.0) (*pinned)[i] = side[i];
+    if (side[i] != 0 && !by_newton[i] && side[i] * -g[i] > 0.0) (*pinned)[i] = side[i];
   for (;;) {
     std::vector<int> free_index;
     for (int i = 0; i < n; ++i)
@@ -434,7 +448,7 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
     bool changed = false;
     for (int a = 0; a < m; ++a) {
       const int i = free_index[a];
-      if (side[i] != 0 && freed_before[i] && side[i] * step(a) > 0.0)
+      if (side[i] != 0 && by_newton[i] && side[i] * step(a) > 0.0)
         (*pinned)[i] = side[i], changed = true;
     }
     if (!changed) return true;
@@ -598,9 +612,10 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
     double radius = options->initial_radius > 0.0 ? options->initial_radius : 1e4;
     std::vector<BlockCache> caches(problem->num_blocks);
     std::vector<int> freed(n, 0);  // freed from a bound once in this solve
+    std::vector<int> closings(n, 0);
     summary->stopped = 0;
     for (int round = 0; round < MAX_ROUNDS;) {
-      BoundWatcher watcher(problem, options, active);
+      BoundWatcher watcher(problem, options, active, closings);
       int budget = std::max(1, std::min(CHUNK, options->max_iterations - iterations));
       std::copy(problem->x, problem->x + n, x0.begin());
       solve_once(problem, options, active, budget, radius, &caches, &watcher, &ceres_summary);
@@ -644,6 +659,7 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       if (watcher.any_hit()) {  // pin and solve the rest
         for (int i = 0; i < n; ++i) {
           if (watcher.hit()[i] == 0) continue;
+          closings[i] += watcher.closed()[i];
           active[i] = watcher.hit()[i];
           problem->x[i] = active[i] < 0 ? problem->lower[i] : problem->upper[i];
         }
@@ -659,7 +675,9 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       }
       if (!any_at_bound) break;
       std::vector<int> pinned;
-      if (!pinned_at_bounds(problem, options->threads, &caches, side, freed, &pinned)) break;
+      std::vector<int> by_newton(n);  // freed once, or pinned for closing in
+      for (int i = 0; i < n; ++i) by_newton[i] = freed[i] || closings[i] > 0;
+      if (!pinned_at_bounds(problem, options->threads, &caches, side, by_newton, &pinned)) break;
       bool released = false;
       for (int i = 0; i < n; ++i) {
         if (active[i] != 0 && pinned[i] == 0) released = true, freed[i] = 1;
