@@ -334,7 +334,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
       s = fit_declare(&p, &plan, err);
       if (s == CF_OK) s = fit_solve(&p, o, o->max_iterations, &summary, err);
     }
-    if (s == CF_OK) s = fit_normal_matrix(&p, o->threads > 0 ? o->threads : 2, jtj, err);
+    if (s == CF_OK) s = fit_normal_matrix(&p, fit_threads(o), jtj, err);
     if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
     int found = 0;
     if (s == CF_OK) s = fit_find_unconstrained(&p, jtj, covariance, rank_deficient, &plan, &found);

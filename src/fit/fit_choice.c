@@ -102,7 +102,7 @@ static void fit_candidate(void *user, int i) {
 static void fit_candidates(const cf_capture *capture, const cf_fit_options options[],
                            const fit_population *train, cf_fit_choice *choice) {
   const cf_fit_options *first = &options[0];
-  int threads = first->threads > 0 ? first->threads : 2;
+  int threads = fit_threads(first);
   candidate_work work = {capture, options, train, choice, threads >= 2};
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", 0, CF_MODEL_COUNT);

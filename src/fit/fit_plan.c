@@ -55,6 +55,10 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
  * here a few failures reach any useful radius. */
 #define MAX_CARRIED_RADIUS 1e10
 
+int fit_threads(const cf_fit_options *o) {
+  return o->threads > 0 ? o->threads : 2;
+}
+
 void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
   *problem = (cf_lsq_problem){
       p->num_unknowns,           x, p->lower,   p->upper, p->num_blocks, fit_problem_evaluate,
@@ -70,7 +74,7 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   cf_lsq_options options;
   cf_lsq_default_options(&options);
   options.max_iterations = max_iterations;
-  options.threads = o->threads > 0 ? o->threads : 2;
+  options.threads = fit_threads(o);
   if (p->radius > 0.0) options.initial_radius = p->radius;
   if (p->function_tolerance > 0.0) options.function_tolerance = p->function_tolerance;
   options.stop = p->stop;
@@ -99,7 +103,7 @@ cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *
   fit_problem_get_x(p, x);
   cf_lsq_problem problem;
   fit_lsq_problem(p, x, &problem);
-  if (!cf_lsq_normal_equations(&problem, o->threads > 0 ? o->threads : 2, jtj, g, &cost))
+  if (!cf_lsq_normal_equations(&problem, fit_threads(o), jtj, g, &cost))
     return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
   int free_u[MOST], m = 0;
   for (int u = 0; u < n; ++u)

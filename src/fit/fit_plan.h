@@ -33,6 +33,9 @@ cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_p
 /* Declare the plan's unknowns on the problem. */
 cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err);
 
+/* The solver threads the options ask for (2 when they say none). */
+int fit_threads(const cf_fit_options *o);
+
 /* The problem as lsq.h sees it, over the unknowns x (num_unknowns; the
  * caller fills them, fit_problem_get_x). */
 void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem);

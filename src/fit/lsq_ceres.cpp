@@ -12,7 +12,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <functional>
 #include <memory>
 #include <mutex>
 #include <new>
@@ -161,6 +160,32 @@ void copy_termination(const ceres::Solver::Summary &s, cf_lsq_summary *out) {
 
 namespace {
 
+// f(t) for t = 0 … count − 1 at once: t = 0 on this thread, each other on
+// one of its own. False when an f(t) returned false or threw, or a thread
+// could not be started (those started are joined first: a joinable
+// std::thread destroyed would end the process).
+template <class F>
+bool in_threads(size_t count, F f) {
+  std::vector<char> ok(count, 1);
+  auto guarded = [&](size_t t) noexcept {
+    try {
+      ok[t] = f(t);
+    } catch (...) {
+      ok[t] = 0;
+    }
+  };
+  std::vector<std::thread> pool;
+  bool started = true;
+  try {
+    for (size_t t = 1; t < count; ++t) pool.emplace_back(guarded, t);
+  } catch (...) {
+    started = false;
+  }
+  if (started) guarded(0);
+  for (auto &thread : pool) thread.join();
+  return started && std::all_of(ok.begin(), ok.end(), [](char o) { return o != 0; });
+}
+
 // cf_lsq_normal_equations, from the blocks' caches where they hold x
 // (caches: one per block, or nullptr).
 int normal_equations(const cf_lsq_problem *problem, int threads, std::vector<BlockCache> *caches,
@@ -169,52 +194,32 @@ int normal_equations(const cf_lsq_problem *problem, int threads, std::vector<Blo
   const size_t count = static_cast<size_t>(std::max(1, threads));
   std::vector<std::vector<double>> sum_jtj(count), sum_jtu(count);
   std::vector<double> sum_cost(count, 0.0);
-  std::vector<int> ok(count, 1);
-  std::function<void(size_t)> accumulate;
-  auto work = [&](size_t t) noexcept {
-    try {
-      accumulate(t);
-    } catch (...) {
-      ok[t] = 0;
-    }
-  };
-  accumulate = [&](size_t t) {
+  const bool ok = in_threads(count, [&](size_t t) {
     BlockCache scratch;
     if (jtj) sum_jtj[t].assign(static_cast<size_t>(n) * n, 0.0);
     sum_jtu[t].assign(n, 0.0);
-    for (size_t b = t; b < problem->num_blocks && ok[t]; b += count) {
+    for (size_t b = t; b < problem->num_blocks; b += count) {
       const int *columns = nullptr;
       const int k = problem->block_columns(problem->user, b, &columns);
       scratch.valid = false;  // it held another block
       BlockCache &cache = caches != nullptr ? (*caches)[b] : scratch;
-      if (!cache.at(problem, b, k, problem->x, true)) {
-        ok[t] = 0;
-        break;
-      }
-      const std::vector<double> &block_jtj = cache.jtj, &block_jtu = cache.jtu;
+      if (!cache.at(problem, b, k, problem->x, true)) return false;
       sum_cost[t] += cache.cost;
       for (int a = 0; a < k; ++a) {
-        sum_jtu[t][columns[a]] += block_jtu[a];
+        sum_jtu[t][columns[a]] += cache.jtu[a];
         if (!jtj) continue;
         for (int c = 0; c < k; ++c)
           sum_jtj[t][static_cast<size_t>(columns[a]) * n + columns[c]] +=
-              block_jtj[static_cast<size_t>(a) * k + c];
+              cache.jtj[static_cast<size_t>(a) * k + c];
       }
     }
-  };
-  try {
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < count; ++t) pool.emplace_back(work, t);
-    work(0);
-    for (auto &thread : pool) thread.join();
-  } catch (...) {
-    return 0;
-  }
+    return true;
+  });
+  if (!ok) return 0;
   if (jtj) std::fill(jtj, jtj + static_cast<size_t>(n) * n, 0.0);
   if (jtu) std::fill(jtu, jtu + n, 0.0);
   *cost = 0.0;
   for (size_t t = 0; t < count; ++t) {
-    if (!ok[t]) return 0;
     *cost += sum_cost[t];
     for (int a = 0; a < n; ++a) {
       if (jtu) jtu[a] += sum_jtu[t][a];
@@ -230,7 +235,11 @@ int normal_equations(const cf_lsq_problem *problem, int threads, std::vector<Blo
 
 extern "C" int cf_lsq_normal_equations(const cf_lsq_problem *problem, int threads, double *jtj,
                                        double *jtu, double *cost) {
-  return normal_equations(problem, threads, nullptr, jtj, jtu, cost);
+  try {
+    return normal_equations(problem, threads, nullptr, jtj, jtu, cost);
+  } catch (...) {  // out of memory for the sums: nothing crosses into C
+    return 0;
+  }
 }
 
 extern "C" cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance,
@@ -460,20 +469,17 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
 double cost_at(const cf_lsq_problem *problem, const double *x, int threads) {
   const size_t count = static_cast<size_t>(std::max(1, threads));
   std::vector<double> partial(count, 0.0);
-  auto work = [&](size_t t) {
+  const bool ok = in_threads(count, [&](size_t t) {
     for (size_t b = t; b < problem->num_blocks; b += count) {
       double cost;
       if (!problem->evaluate(problem->user, x, b, &cost, nullptr, nullptr)) cost = NAN;
       partial[t] += cost;
     }
-  };
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < count; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (auto &thread : pool) thread.join();
+    return true;
+  });
   double total = 0.0;
   for (double p : partial) total += p;
-  return total;
+  return ok ? total : NAN;
 }
 
 // Did the chunk's successful steps decrease the cost by more than their
