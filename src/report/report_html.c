@@ -5,22 +5,7 @@
 #include <string.h>
 
 #include "report_internal.h"
-
-/* Text with HTML's special characters escaped. */
-static void text(FILE *f, const char *s) {
-  for (; s && *s; ++s) {
-    if (*s == '&')
-      fputs("&amp;", f);
-    else if (*s == '<')
-      fputs("&lt;", f);
-    else if (*s == '>')
-      fputs("&gt;", f);
-    else if (*s == '"')
-      fputs("&quot;", f);
-    else
-      fputc(*s, f);
-  }
-}
+#include "svg.h"
 
 static double number_at(const json_t *object, const char *key) {
   const json_t *v = json_object_get(object, key);
@@ -37,7 +22,7 @@ static void head(FILE *f, const report_data *d, const char *fit_path, const char
   fputs(
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>clayfit report: ",
       f);
-  text(f, d->fit->capture_name);
+  svg_escape(f, d->fit->capture_name);
   fputs(
       "</title>\n<style>\nbody{font-family:sans-serif;margin:24px;max-width:1400px}\n"
       "table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:3px 8px;"
@@ -47,18 +32,18 @@ static void head(FILE *f, const report_data *d, const char *fit_path, const char
       "tr.chosen td{font-weight:bold}.warn{color:#a04000}\n</style></head><body>\n",
       f);
   fputs("<h1>clayfit report</h1>\n<p>Fit <code>", f);
-  text(f, fit_path);
+  svg_escape(f, fit_path);
   fputs("</code> of the capture <code>", f);
-  text(f, d->fit->capture_path);
+  svg_escape(f, d->fit->capture_path);
   fprintf(f, "</code> (%s; %zu images, %zu observations): model <b>%s (%s)</b>, radiometry ",
           d->fit->capture_name, d->images, d->count, m->code, m->name);
-  text(f, d->fit->radiometry);
+  svg_escape(f, d->fit->radiometry);
   fputs(". Fitted by clayfit ", f);
-  text(f, d->fit->clayfit_version);
+  svg_escape(f, d->fit->clayfit_version);
   fputs(" on ", f);
-  text(f, d->fit->created);
+  svg_escape(f, d->fit->created);
   fputs("; report by clayfit ", f);
-  text(f, version);
+  svg_escape(f, version);
   fputs(".</p>\n", f);
 }
 
@@ -110,7 +95,7 @@ static void parameter_table(FILE *f, const report_data *d) {
   const json_t *warnings = d->doc ? json_object_get(d->doc, "warnings") : NULL;
   for (size_t i = 0; json_is_array(warnings) && i < json_array_size(warnings); ++i) {
     fputs("<p class=\"warn\">Warning: ", f);
-    text(f, json_string_value(json_array_get(warnings, i)));
+    svg_escape(f, json_string_value(json_array_get(warnings, i)));
     fputs("</p>\n", f);
   }
 }
@@ -141,7 +126,7 @@ static void choice_table(FILE *f, const report_data *d) {
     return;
   }
   fputs("<p>Held out: ", f);
-  text(f, string_at(choice, "heldout"));
+  svg_escape(f, string_at(choice, "heldout"));
   fputs(
       ".</p>\n<table><tr><th class=\"l\">model</th><th>unknowns</th><th>BIC</th>"
       "<th>held-out RMS (&sigma;)</th><th>held-out relative RMSE</th><th>training relative "
@@ -152,7 +137,7 @@ static void choice_table(FILE *f, const report_data *d) {
     const json_t *c = json_array_get(list, i);
     fprintf(f, "<tr%s><td class=\"l\">",
             json_is_true(json_object_get(c, "chosen")) ? " class=\"chosen\"" : "");
-    text(f, string_at(c, "model"));
+    svg_escape(f, string_at(c, "model"));
     fprintf(f,
             "</td><td>%.0f</td><td>%.6g</td><td>%.4g</td><td>%.4g %%</td><td>%.4g %%</td>"
             "<td>%.3g</td><td class=\"l\">",
@@ -172,7 +157,7 @@ static void choice_table(FILE *f, const report_data *d) {
       fputs("; ", f);
     }
     fputs("</td><td class=\"l\">", f);
-    text(f, json_is_true(json_object_get(c, "chosen")) ? "chosen" : string_at(c, "note"));
+    svg_escape(f, json_is_true(json_object_get(c, "chosen")) ? "chosen" : string_at(c, "note"));
     fputs("</td></tr>\n", f);
   }
   fputs("</table>\n", f);
@@ -192,7 +177,7 @@ static void plots_and_speed(FILE *f, const report_data *d) {
           number_at(timing, "load_s"), number_at(timing, "fit_s"), number_at(timing, "choice_s"),
           number_at(timing, "total_s"), number_at(solver, "iterations"),
           number_at(solver, "solves"), number_at(solver, "seconds"));
-  text(f, string_at(solver, "termination"));
+  svg_escape(f, string_at(solver, "termination"));
   fprintf(f, ". Observations: %zu.</p>\n", d->count);
 }
 
@@ -249,7 +234,7 @@ static void image_rows(FILE *f, const report_data *d, char (*files)[3][64]) {
               : p == 1 ? "render"
                        : "residual");
     fputs("<div>", f);
-    text(f, im->name);
+    svg_escape(f, im->name);
     fprintf(f,
             "<br>%zu observations, relative RMSE %.3g %%, RMS %.3g &sigma;<br>%zu censored, "
             "%zu beyond the loss</div>\n",

@@ -14,15 +14,16 @@ double svg_py(const svg_plot *p, double y) {
   return p->top + (1.0 - t) * p->height;
 }
 
-/* Text with &, < and > escaped. */
-static void escaped(FILE *f, const char *text) {
-  for (; *text; ++text) {
+void svg_escape(FILE *f, const char *text) {
+  for (; text && *text; ++text) {
     if (*text == '&')
       fputs("&amp;", f);
     else if (*text == '<')
       fputs("&lt;", f);
     else if (*text == '>')
       fputs("&gt;", f);
+    else if (*text == '"')
+      fputs("&quot;", f);
     else
       fputc(*text, f);
   }
@@ -42,7 +43,7 @@ cf_status svg_begin(svg_plot *p, const char *path, int width, int height, const 
           "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n<text x=\"%d\" y=\"20\" "
           "text-anchor=\"middle\" font-size=\"14\">",
           width, height, width, height, width / 2);
-  escaped(p->file, title);
+  svg_escape(p->file, title);
   fputs("</text>\n", p->file);
   return CF_OK;
 }
@@ -82,12 +83,12 @@ void svg_axes(svg_plot *p, const char *x_label, const char *y_label) {
   }
   fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">", p->left + p->width / 2,
           p->top + p->height + 36);
-  escaped(f, x_label);
+  svg_escape(f, x_label);
   fprintf(f,
           "</text>\n<text transform=\"translate(14 %.1f) rotate(-90)\" "
           "text-anchor=\"middle\">",
           p->top + p->height / 2);
-  escaped(f, y_label);
+  svg_escape(f, y_label);
   fputs("</text>\n", f);
 }
 
@@ -127,13 +128,13 @@ void svg_legend(svg_plot *p, int row, const char *colour, const char *text) {
           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
           "stroke-width=\"2\"/><text x=\"%.1f\" y=\"%.1f\">",
           x, y - 4, x + 20, y - 4, colour, x + 26, y);
-  escaped(p->file, text);
+  svg_escape(p->file, text);
   fputs("</text>\n", p->file);
 }
 
 void svg_text(svg_plot *p, double px, double py, const char *anchor, const char *text) {
   fprintf(p->file, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"%s\">", px, py, anchor);
-  escaped(p->file, text);
+  svg_escape(p->file, text);
   fputs("</text>\n", p->file);
 }
 

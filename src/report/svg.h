@@ -31,6 +31,10 @@ void svg_bars(svg_plot *plot, const double *x, const double *y, int n, double w,
 void svg_legend(svg_plot *plot, int row, const char *colour, const char *text);
 /* Text at picture coordinates. */
 void svg_text(svg_plot *plot, double px, double py, const char *anchor, const char *text);
+
+/* Text with markup's special characters (&, <, >, ") escaped, for SVG and
+ * the page alike; NULL writes nothing. */
+void svg_escape(FILE *f, const char *text);
 /* Close the file; CF_EIO naming path if writing failed. */
 cf_status svg_end(svg_plot *plot, const char *path, cf_error *err);
 
