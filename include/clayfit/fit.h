@@ -151,8 +151,16 @@ typedef struct cf_fit_result {
   double *exposures;         /* e_k per image (1 unless fitted), owned */
   double sigma;              /* σ when estimated from the residuals, else 0 */
 
+  /* the pixel budget the fit used: sample_count observations drawn by
+   * `sampling` from the population_count in use (sample_count 0: every
+   * observation, no budget) */
+  size_t sample_count, population_count;
+  cf_sampling sampling;
+
   /* residuals over every observation and channel, unweighted, radiance
-   * units; relative = RMSE / RMS of the measurements */
+   * units; relative = RMSE / RMS of the measurements. With a pixel
+   * budget: estimated from the sample, each residual weighed by its
+   * observation's weight (the counts are the sample's) */
   size_t residuals, censored, rejected; /* rejected: |r| beyond the loss scale */
   double rmse, relative_rmse;
   double *image_rmse, *image_relative_rmse; /* per image, owned */

@@ -164,6 +164,11 @@ static void print_summary(const cf_fit_result *r, const char *path) {
       "the robust loss), %d iterations, %s\n",
       m->code, m->name, 100.0 * r->relative_rmse, r->residuals, r->censored, r->rejected,
       r->iterations, r->termination);
+  if (r->sample_count > 0)
+    printf(
+        "  a pixel budget: fitted to %zu of %zu observations (%s), each weighed by the inverse "
+        "of its chance; the RMSEs are estimates for all of them (clayfit report: exact)\n",
+        r->sample_count, r->population_count, cf_sampling_name(r->sampling));
   printf(
       "  without the highlight cores (%g px around each image's brightest pixel): %.4g %%; "
       "inside them: %.4g %% over %zu residuals\n",

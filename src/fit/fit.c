@@ -336,6 +336,8 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     }
     if (s == CF_OK) s = fit_normal_matrix(&p, fit_threads(o), jtj, err);
     if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
+    if (s == CF_OK && !rank_deficient)
+      s = fit_sample_covariance(&p, fit_threads(o), covariance, err);
     int found = 0;
     if (s == CF_OK) s = fit_find_unconstrained(&p, jtj, covariance, rank_deficient, &plan, &found);
     if (s == CF_OK && !found && !hidden.tested && !rank_deficient) {
@@ -409,6 +411,7 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
   uint32_t *index;
   fit_sample budget = {0};
   cf_status s = fit_population_of_images(capture, o->use_image, &population, &index, err);
+  size_t in_use = s == CF_OK ? population.count : 0;
   if (s == CF_OK && o->budget > 0 && o->budget < population.count) { /* a pixel budget */
     if ((unsigned)o->sampling >= CF_SAMPLING_COUNT)
       s = cf_error_set(err, CF_EINVAL, "invalid sampling %d", (int)o->sampling);
@@ -418,6 +421,11 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
     if (s == CF_OK) population = (fit_population){budget.index, budget.count, budget.weight};
   }
   if (s == CF_OK) s = fit_run_population(capture, &population, o, r, err);
+  if (s == CF_OK && budget.weight) {
+    r->sample_count = budget.count;
+    r->population_count = in_use;
+    r->sampling = o->sampling;
+  }
   fit_sample_free(&budget);
   free(index);
   return s;

@@ -177,6 +177,19 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
 }
 
 /* How the pixel footprints were integrated (cf_fit_options.footprint). */
+/* The pixel budget's sample, or null (every observation). */
+static json_t *sample_json(const cf_fit_result *r) {
+  if (r->sample_count == 0) return json_null();
+  return json_pack(
+      "{s:s, s:I, s:I, s:s}", "sampling", cf_sampling_name(r->sampling), "observations",
+      (json_int_t)r->sample_count, "population", (json_int_t)r->population_count, "meaning",
+      "the fit used a pixel budget: `observations` of the `population` in use, drawn by "
+      "`sampling`, each weighed by the inverse of its chance of being drawn; the standard "
+      "deviations are the sample's (the sandwich A^-1 B A^-1 of the weighted fit), and the "
+      "residual statistics are estimates for every observation from the weighted sample "
+      "(their counts are the sample's); clayfit report evaluates every observation");
+}
+
 static json_t *footprint_json(const cf_fit_report *rep) {
   const cf_fit_result *r = rep->result;
   const char *mode = rep->footprint == 0 ? "auto" : rep->footprint == 1 ? "centre" : "fixed";
@@ -264,6 +277,7 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
     json_object_set_new(json_object_get(doc, "timing"), "choice_s",
                         json_real(rep->choice ? rep->choice->seconds : 0.0));
   if (doc) json_object_set_new(doc, "footprint", footprint_json(rep));
+  if (doc) json_object_set_new(doc, "sample", sample_json(r));
   if (doc)
     json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
   if (doc)

@@ -621,6 +621,33 @@ static cf_status read_response(const json_t *root, const json_at *at, cf_fit_res
   return json_get_string(obj, &here, "meaning", 1, &meaning, NULL, err);
 }
 
+/* The pixel budget's sample, or null. */
+static cf_status read_sample(const json_t *root, const json_at *at, cf_fit_result *r,
+                             cf_error *err) {
+  const json_t *obj;
+  TRY(get_member(root, at, "sample", &obj, err));
+  json_at here = json_member_at(at, "sample");
+  if (json_is_null(obj)) return CF_OK;
+  if (!json_is_object(obj))
+    return json_fail(&here, err, CF_EPARSE, "expected an object or null, got %s",
+                     json_type_name(obj));
+  static const char *const known[] = {"sampling", "observations", "population", "meaning", NULL};
+  TRY(json_check_keys(obj, &here, known, err));
+  static const char *const samplings[] = {"uniform", "stratified", "importance", NULL};
+  int sampling;
+  TRY(json_get_choice(obj, &here, "sampling", 1, samplings, &sampling, NULL, err));
+  r->sampling = (cf_sampling)sampling;
+  TRY(get_count(obj, &here, "observations", &r->sample_count, err));
+  TRY(get_count(obj, &here, "population", &r->population_count, err));
+  if (r->sample_count == 0 || r->sample_count >= r->population_count) {
+    json_at e = json_member_at(&here, "observations");
+    return json_fail(&e, err, CF_EPARSE, "%zu: expected 1 to %zu (below the population)",
+                     r->sample_count, r->population_count > 0 ? r->population_count - 1 : 0);
+  }
+  const char *meaning;
+  return json_get_string(obj, &here, "meaning", 1, &meaning, NULL, err);
+}
+
 /* One candidate of an automatic choice. */
 static cf_status read_candidate(const json_t *item, const json_at *e, cf_error *err) {
   if (!json_is_object(item))
@@ -751,7 +778,7 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
       "params",          "derived",         "scale",      "correlation", "held",
       "not_constrained", "at_bound",        "noise",      "loss",        "residuals",
       "solver",          "starts",          "best_start", "warnings",    "timing",
-      "choice",          "footprint",       "response",   NULL};
+      "choice",          "footprint",       "response",   "sample",      NULL};
   TRY(json_check_keys(root, &at, known, err));
   long long layout;
   TRY(json_get_integer(root, &at, "clayfit_fit", 1, 1, 1, &layout, NULL, err));
@@ -775,6 +802,7 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
   TRY(read_timing(root, &at, r, err));
   TRY(read_choice(root, &at, r->model, err));
   TRY(read_footprint(root, &at, f, err));
+  TRY(read_sample(root, &at, r, err));
   return read_response(root, &at, r, err);
 }
 

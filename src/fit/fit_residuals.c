@@ -28,20 +28,23 @@ static cf_status brightest(const fit_problem *p, const double *measured, long **
   return CF_OK;
 }
 
-/* Sums of squared residuals and measurements, and their count. */
+/* Weighted sums of squared residuals and measurements, the weights' sum
+ * and the count (a pixel budget's weights make the sums estimates of
+ * every observation's; without one every weight is 1). */
 typedef struct sums {
-  double e2, y2;
+  double e2, y2, w;
   size_t n;
 } sums;
 
-static void add(sums *s, double e, double y) {
-  s->e2 += e * e;
-  s->y2 += y * y;
+static void add(sums *s, double e, double y, double w) {
+  s->e2 += w * e * e;
+  s->y2 += w * y * y;
+  s->w += w;
   ++s->n;
 }
 
 static double rms(const sums *s) {
-  return s->n ? sqrt(s->e2 / (double)s->n) : 0.0;
+  return s->w > 0.0 ? sqrt(s->e2 / s->w) : 0.0;
 }
 static double relative(const sums *s) {
   return s->y2 > 0.0 ? sqrt(s->e2 / s->y2) : 0.0;
@@ -68,6 +71,7 @@ cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result 
     double dx = (double)p->obs->pixel[2 * k] - (double)p->obs->pixel[2 * kb];
     double dy = (double)p->obs->pixel[2 * k + 1] - (double)p->obs->pixel[2 * kb + 1];
     int in_core = dx * dx + dy * dy <= radius2;
+    double w = p->sample_root ? p->sample_root[i] * p->sample_root[i] : 1.0;
     for (int c = 0; c < 3; ++c) {
       size_t at = 3 * i + (size_t)c;
       double e = prediction[at] - measured[at];
@@ -76,9 +80,9 @@ cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result 
         continue;
       }
       if (o->loss != CF_LOSS_NONE && fabs(e) * p->inv_sigma[at] > o->loss_scale) ++r->rejected;
-      add(&total, e, measured[at]);
-      add(&per_image[image], e, measured[at]);
-      add(in_core ? &core : &rest, e, measured[at]);
+      add(&total, e, measured[at], w);
+      add(&per_image[image], e, measured[at], w);
+      add(in_core ? &core : &rest, e, measured[at], w);
     }
   }
   if (s == CF_OK) {

@@ -10,7 +10,10 @@
 #include "fit_problem.h"
 
 /* RMSE, relative RMSE, censored and rejected counts, per image, at the
- * current values, into r (which then owns its per-image arrays). */
+ * current values, into r (which then owns its per-image arrays). A pixel
+ * budget's sample weighs each residual by its observation's weight, so
+ * the RMSEs estimate those of every observation; the counts are the
+ * sample's. */
 cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result *r, cf_error *err);
 
 /* σ = 1.4826 × the median absolute residual (a robust estimate) over the

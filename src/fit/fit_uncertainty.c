@@ -78,6 +78,40 @@ cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *c
   return s;
 }
 
+cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance, cf_error *err) {
+  if (!p->sample_root) return CF_OK;
+  size_t n = (size_t)p->num_unknowns;
+  double *roots = malloc((p->count ? p->count : 1) * sizeof *roots);
+  double *b = malloc(n * n * sizeof *b), *bc = malloc(n * n * sizeof *bc);
+  cf_status s = roots && b && bc ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) { /* B: each row weighed by w instead of √w */
+    memcpy(roots, p->sample_root, p->count * sizeof *roots);
+    for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = roots[i] * roots[i];
+    s = fit_normal_matrix(p, threads, b, err);
+    memcpy(p->sample_root, roots, p->count * sizeof *roots);
+  }
+  if (s == CF_OK) { /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = 0; j < n; ++j) {
+        double sum = 0.0;
+        for (size_t k = 0; k < n; ++k) sum += b[i * n + k] * covariance[k * n + j];
+        bc[i * n + j] = sum;
+      }
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = 0; j < n; ++j) {
+        double sum = 0.0;
+        for (size_t k = 0; k < n; ++k) sum += covariance[i * n + k] * bc[k * n + j];
+        b[i * n + j] = sum;
+      }
+    for (size_t i = 0; i < n; ++i) /* symmetric to the last bit */
+      for (size_t j = 0; j < n; ++j) covariance[i * n + j] = 0.5 * (b[i * n + j] + b[j * n + i]);
+  }
+  free(roots);
+  free(b);
+  free(bc);
+  return s;
+}
+
 /* Mark the model slots the capture does not constrain: those that carry
  * the eigenvectors of the (width-scaled) normal matrix whose eigenvalues
  * are negligible, or whose standard deviation exceeds half their range. */

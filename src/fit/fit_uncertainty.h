@@ -21,6 +21,16 @@ cf_status fit_normal_matrix(fit_problem *p, int threads, double *jtj, cf_error *
 cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
                               int *rank_deficient, cf_error *err);
 
+/* A pixel budget's covariance (p->sample_root set; nothing to do
+ * otherwise). The weighted fit's normal matrix A = Σ w JᵀJ, w the
+ * inverse of an observation's chance of being drawn, estimates the
+ * information of every observation, which the sample does not hold; the
+ * estimate's covariance is the sandwich A⁻¹ B A⁻¹ with B = Σ w² JᵀJ (the
+ * residuals of unit variance; the robust loss's weights as in A). With one
+ * weight N/n for all it is the sample's own (Σ JᵀJ)⁻¹. `covariance` holds
+ * A⁻¹ (fit_free_covariance) on entry and the sandwich on return. */
+cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance, cf_error *err);
+
 /* Mark in the plan the model slots the capture does not constrain: those
  * carrying the eigenvectors of the range-scaled normal matrix with
  * negligible eigenvalues, or whose standard deviation exceeds half their

@@ -178,7 +178,18 @@ static void plots_and_speed(FILE *f, const report_data *d) {
           number_at(timing, "total_s"), number_at(solver, "iterations"),
           number_at(solver, "solves"), number_at(solver, "seconds"));
   svg_escape(f, string_at(solver, "termination"));
-  fprintf(f, ". Observations: %zu.</p>\n", d->count);
+  fprintf(f, ". Observations: %zu", d->count);
+  const json_t *sample = d->doc ? json_object_get(d->doc, "sample") : NULL;
+  if (json_is_object(sample)) {
+    fprintf(f, "; the fit used a pixel budget of %.0f of them (",
+            number_at(sample, "observations"));
+    svg_escape(f, string_at(sample, "sampling"));
+    fputs(
+        "), each weighed by the inverse of its chance: its standard deviations are the "
+        "sample's; the residuals on this page are every observation's",
+        f);
+  }
+  fputs(".</p>\n", f);
 }
 
 /* The colour scale of the heat maps, inline. */

@@ -75,6 +75,7 @@ def fit_json(model, values):
                       "observations": 0, "samples": 0, "max_samples_per_side": 1,
                       "meaning": "fixture"},
         "response": {"value": 1.0, "sd": 0.0, "fitted": False, "meaning": "fixture"},
+        "sample": None,
     }
 
 

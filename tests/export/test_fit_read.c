@@ -88,6 +88,11 @@ static void make_result(cf_fit_result *r, cf_model_id model, size_t images) {
   r->footprint_observations = 40;
   r->footprint_samples = 640;
   r->footprint_max = 4;
+  if (model == CF_MODEL_CLAY) { /* a pixel budget (the others: none, "sample": null) */
+    r->sample_count = 1000;
+    r->population_count = 9000;
+    r->sampling = CF_SAMPLING_STRATIFIED;
+  }
   r->warning_count = 1;
   snprintf(r->warnings[0], sizeof r->warnings[0], "a warning");
 }
@@ -142,6 +147,9 @@ static void round_trip(const cf_capture *capture, const char *dir, cf_model_id m
   CHECK(g->footprint_observations == 40 && g->footprint_samples == 640 && g->footprint_max == 4,
         "footprint counts");
   CHECK(f.footprint == 3 && f.footprint_tolerance == 0.004, "footprint %d", f.footprint);
+  CHECK(g->sample_count == r.sample_count && g->population_count == r.population_count &&
+            (r.sample_count == 0 || g->sampling == r.sampling),
+        "%s: sample %zu of %zu", m->code, g->sample_count, g->population_count);
   CHECK(strcmp(f.clayfit_version, "9.9.9") == 0, "version '%s'", f.clayfit_version);
   CHECK(strlen(f.created) == 20, "created '%s'", f.created);
   char expected[700];
@@ -219,6 +227,10 @@ int main(void) {
   refused(dir, "\"unit\": \"rad\"", "\"unit\": \"deg\"", "params.diffuse_roughness.unit");
   refused(dir, "\"exposure\": 1.0", "\"exposure\": -1", "residuals.per_image[0].exposure");
   refused(dir, "\"value\": 1.25", "\"value\": \"x\"", "scale.value: expected a number");
+  refused(dir, "\"sampling\": \"stratified\"", "\"sampling\": \"random\"",
+          "sample.sampling: 'random' is not one of");
+  refused(dir, "\"observations\": 1000", "\"observations\": 9000",
+          "sample.observations: 9000: expected 1 to 8999");
   cf_fit_file f;
   cf_error err = {0};
   CHECK(cf_fit_file_read("/no/such/fit.json", &f, &err) == CF_ENOTFOUND, "missing file: %s",

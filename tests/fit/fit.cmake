@@ -85,6 +85,14 @@ clayfit_cli_test(error_fit_no_capture --exit 2 --stderr "no-such-capture.json"
 # and hard-case tests already take through the same code
 clayfit_c_test(test_fit_calibration SOURCES fit/test_fit_calibration.c LIBS clayfit_fit_test_support
                LABELS "fit;slow")
+# the same with a pixel budget (about a tenth of the observations): the
+# standard deviations of a weighted sample
+foreach(sampling uniform stratified importance)
+  add_test(NAME test_fit_calibration_budget_${sampling}
+           COMMAND test_fit_calibration 3000 ${sampling})
+  set_tests_properties(test_fit_calibration_budget_${sampling} PROPERTIES LABELS "fit;slow"
+                       SKIP_RETURN_CODE 77)
+endforeach()
 # Pixel footprints: a highlight narrower than a pixel, rendered with 4 x 4
 # and 16 x 16 samples per pixel.
 clayfit_c_test(test_fit_footprint SOURCES fit/test_fit_footprint.c LIBS clayfit_fit_test_support
