@@ -110,6 +110,8 @@ typedef struct cf_fit_start {
   double start[CF_MAX_DIM], end[CF_MAX_DIM];
   double cost; /* ½ Σ ρ at the end */
   int iterations;
+  int stopped; /* 1: stopped where an earlier start's minimum was (within
+                  1 % of every range, or within the noise of it) */
 } cf_fit_start;
 
 enum {

@@ -378,6 +378,15 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     r->trace_count = p.trace_count;
     snprintf(r->termination, sizeof r->termination, "%s", summary.termination);
     r->solve_seconds = p.solver_seconds;
+    if (strcmp(summary.termination, "NO_CONVERGENCE") == 0) /* out of iterations */
+      fit_add_warning(r,
+                      "the last solve ended without converging (%s after its %d iterations "
+                      "at most): the values may be short of the minimum; raise "
+                      "--max-iterations%s",
+                      summary.termination, o->max_iterations,
+                      population->weight ? ", or the pixel budget (a small sample may not "
+                                           "show the highlight well enough to fit it)"
+                                         : "");
     fit_footprint_tally(&p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);
     r->ambiguous = fit_ambiguous(r, o->model, has_noise ? 1.0 : sigma * sigma);
     if (r->ambiguous)

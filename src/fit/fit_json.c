@@ -228,9 +228,9 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
   for (int i = 0; i < r->starts; ++i)
     json_array_append_new(
         starts,
-        json_pack("{s:o, s:o, s:f, s:i}", "start", params_by_name(r->model, r->start[i].start),
+        json_pack("{s:o, s:o, s:f, s:i, s:b}", "start", params_by_name(r->model, r->start[i].start),
                   "end", params_by_name(r->model, r->start[i].end), "cost", r->start[i].cost,
-                  "iterations", r->start[i].iterations));
+                  "iterations", r->start[i].iterations, "stopped", r->start[i].stopped));
   json_t *stages = json_object();
   for (int i = 0; i < CF_FIT_STAGE_COUNT; ++i)
     json_object_set_new(stages, cf_fit_stage_name((cf_fit_stage)i), json_real(r->stage_seconds[i]));

@@ -99,8 +99,9 @@ typedef struct fit_problem {
   /* the trust region the last solve ended with (0: none yet), where the
    * next starts (lsq.h) */
   double radius;
-  /* the solves' relative function tolerance (0: lsq.h's default) */
-  double function_tolerance;
+  /* the solves' relative function tolerance and least relative decrease
+   * of a step (0: lsq.h's defaults) */
+  double function_tolerance, min_relative_decrease;
   /* optional: ends a solve early (lsq.h's cf_lsq_options.stop) */
   int (*stop)(void *user, const double *x, double cost);
   void *stop_user;

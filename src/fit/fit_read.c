@@ -524,7 +524,7 @@ static cf_status read_starts(const json_t *root, const json_at *at, cf_fit_resul
     const json_t *item = json_array_get(starts, i), *values;
     if (!json_is_object(item))
       return json_fail(&e, err, CF_EPARSE, "expected an object, got %s", json_type_name(item));
-    static const char *const known[] = {"start", "end", "cost", "iterations", NULL};
+    static const char *const known[] = {"start", "end", "cost", "iterations", "stopped", NULL};
     TRY(json_check_keys(item, &e, known, err));
     cf_fit_start *s = &r->start[i];
     TRY(json_get_object(item, &e, "start", 1, &values, NULL, err));
@@ -535,6 +535,7 @@ static cf_status read_starts(const json_t *root, const json_at *at, cf_fit_resul
     TRY(read_values_by_name(values, &vh, r->model, s->end, err));
     TRY(json_get_number(item, &e, "cost", 1, -HUGE_NUMBER, HUGE_NUMBER, &s->cost, NULL, err));
     TRY(get_int(item, &e, "iterations", 0, 1 << 30, &s->iterations, err));
+    TRY(json_get_bool(item, &e, "stopped", 1, &s->stopped, NULL, err));
   }
   TRY(get_int(root, at, "best_start", 0, n ? (int)n - 1 : 0, &r->best_start, err));
   const json_t *warnings;

@@ -54,6 +54,10 @@ typedef struct cf_lsq_options {
   int max_iterations;
   int threads;
   double function_tolerance, gradient_tolerance, parameter_tolerance;
+  /* a step is taken when it lowers the cost by at least this fraction of
+   * the decrease its quadratic model predicts (Ceres'
+   * min_relative_decrease, 1e-3); below, the trust region shrinks faster */
+  double min_relative_decrease;
   /* a line search that lowers the cost by less than this is not worth
    * another solve (the fit's costs are in units of σ²: 1e-3 is a change
    * of χ² by 0.002) */

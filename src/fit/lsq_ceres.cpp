@@ -288,6 +288,7 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->gradient_tolerance = 1e-12;
   options->parameter_tolerance = 1e-10;
   options->line_search_tolerance = 1e-3;
+  options->min_relative_decrease = 1e-3;
   options->initial_radius = 1e4;
   options->stop = nullptr;
   options->stop_user = nullptr;
@@ -582,6 +583,7 @@ void solve_once(cf_lsq_problem *problem, const cf_lsq_options *options,
   // the cost alone with quadratic interpolation; cubic evaluates the
   // Jacobian at every trial (a whole extra pass per iteration)
   solver_options.line_search_interpolation_type = ceres::QUADRATIC;
+  solver_options.min_relative_decrease = options->min_relative_decrease;
   solver_options.num_threads = options->threads;
   solver_options.function_tolerance = options->function_tolerance;
   solver_options.gradient_tolerance = options->gradient_tolerance;

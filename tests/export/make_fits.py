@@ -66,7 +66,7 @@ def fit_json(model, values):
                                           "meaning": "fixture"}},
         "solver": {"iterations": 5, "solves": 1, "termination": "CONVERGENCE", "seconds": 0.1,
                    "final_cost": 1.0},
-        "starts": [{"start": start, "end": start, "cost": 1.0, "iterations": 5}],
+        "starts": [{"start": start, "end": start, "cost": 1.0, "iterations": 5, "stopped": False}],
         "best_start": 0, "warnings": [],
         "timing": {"load_s": 0.1, "fit_s": 0.2, "total_s": 0.3, "choice_s": 0.0,
                    "stages": {"start": 0.0, "refine": 0.0, "solve": 0.1, "statistics": 0.0}},

@@ -83,6 +83,7 @@ static void make_result(cf_fit_result *r, cf_model_id model, size_t images) {
     r->start[i].start[0] = 0.1 * (i + 1);
     r->start[i].cost = 10.0 + i;
     r->start[i].iterations = 5 + i;
+    r->start[i].stopped = i;
   }
   r->best_start = 1;
   r->footprint_observations = 40;
@@ -143,6 +144,7 @@ static void round_trip(const cf_capture *capture, const char *dir, cf_model_id m
   CHECK(strcmp(g->termination, "CONVERGENCE") == 0, "termination");
   CHECK(g->starts == 2 && g->best_start == 1, "starts");
   CHECK(g->start[0].start[0] == 0.1 && g->start[1].cost == 11.0, "start values");
+  CHECK(g->start[0].stopped == 0 && g->start[1].stopped == 1, "start stopped");
   CHECK(g->warning_count == 1 && strcmp(g->warnings[0], "a warning") == 0, "warnings");
   CHECK(g->footprint_observations == 40 && g->footprint_samples == 640 && g->footprint_max == 4,
         "footprint counts");

@@ -40,6 +40,23 @@ clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
   --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/hold --model dielectric
      --hold f0=0.05 --loss none --footprint centre)
+# A pixel budget: the sample recorded, the residuals estimated for every
+# observation; a solve out of iterations says so.
+clayfit_fit_cli_test(fit_budget --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/budget/fit.json
+  --expect "doc['sample']['sampling'] == 'importance' and doc['sample']['observations'] <= 3002"
+  --expect "doc['sample']['population'] > 10 * doc['sample']['observations']"
+  --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
+  --expect "doc['residuals']['count'] <= 3 * 3002 and doc['residuals']['relative_rmse'] < 1e-4"
+  --expect "not any('without converging' in w for w in doc['warnings'])"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/budget --model M2
+     --footprint centre --budget 3000 --sampling importance)
+clayfit_fit_cli_test(fit_out_of_iterations --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/short/fit.json
+  --expect "doc['solver']['termination'] == 'NO_CONVERGENCE'"
+  --expect "any('without converging' in w and '--max-iterations' in w for w in doc['warnings'])"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/short --model M2
+     --footprint centre --max-iterations 1 --no-multistart)
 # An unknown tone curve: the same capture's linear EXR values decoded as
 # stored^1.5 (encoding "gamma", gamma 1.5) with tone_curve "unknown": the
 # fitted response exponent is 1.5 and the material unchanged.
