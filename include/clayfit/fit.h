@@ -92,8 +92,9 @@ typedef struct cf_fit_options {
   int footprint;
   double footprint_tolerance; /* default 2e-3 */
   /* a pixel budget: the fit on every observation uses at most `budget` of
-   * them drawn by `sampling` (0, the default: all); the starts and the
-   * model choice use their own subsamples anyway */
+   * them drawn by `sampling` (0: all; default CF_FIT_DEFAULT_BUDGET,
+   * stratified); the starts and the model choice use their own subsamples
+   * anyway */
   size_t budget;
   cf_sampling sampling;
   double density;         /* the film's known thickness for the report of
@@ -102,6 +103,14 @@ typedef struct cf_fit_options {
   cf_progress_fn progress;
   void *progress_user;
 } cf_fit_options;
+
+/* The default pixel budget: 10⁵ observations, stratified by half-angle.
+ * Measured (clayfit bench fit, README): on the synthetic captures and on
+ * DiLiGenT the relative RMSE over every observation stays within 1 % of
+ * the fit to all of them (10⁴ failed on DiLiGenT: too few highlight
+ * pixels), at a half to a third of the time; the standard deviations are
+ * the sample's (larger by about √(observations / 10⁵)). */
+#define CF_FIT_DEFAULT_BUDGET 100000
 
 void cf_fit_default_options(cf_fit_options *options, cf_model_id model);
 

@@ -21,7 +21,7 @@ static void fit_usage(FILE *out) {
           "                   [--free name ...] [--loss huber|cauchy|none] [--loss-scale K]\n"
           "                   [--fit-exposures] [--no-multistart] [--density D]\n"
           "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
-          "                   [--budget N] [--sampling uniform|stratified|importance]\n"
+          "                   [--budget N|all] [--sampling uniform|stratified|importance]\n"
           "                   [--max-iterations N] [--threads N]\n\n"
           "Fits the model to the capture's observations and writes OUTDIR/fit.json\n"
           "(data_schema/fit.schema.json): parameters with units, standard deviations and\n"
@@ -47,10 +47,14 @@ static void fit_usage(FILE *out) {
           "                      every pixel S x S (as synth --supersample S renders)\n"
           "  --footprint-tolerance T  auto's relative error of a lobe over a pixel\n"
           "                      (default 0.002)\n"
-          "  --budget N          fit on at most N observations (default: all), drawn by\n"
+          "  --budget N|all      fit on at most N observations (default 100000; all: every\n"
+          "                      one), drawn by\n"
           "  --sampling S        uniform, stratified by half-angle (default), or importance\n"
           "                      (the highlights and the silhouette kept); each weighed by\n"
-          "                      the inverse of its chance (clayfit bench fit: the curve)\n"
+          "                      the inverse of its chance (clayfit bench fit: the curve).\n"
+          "                      The standard deviations are then the sample's, the\n"
+          "                      residual statistics in fit.json estimates for every\n"
+          "                      observation (clayfit report evaluates each one)\n"
           "  --max-iterations N  per solve (default 100)\n"
           "  --threads N         solver threads (default 2)\n");
 }
@@ -216,7 +220,12 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
   const char *out_dir = NULL, *model_text = "auto";
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
   int hold_count = 0, free_count = 0;
-  fit_settings set = {CF_LOSS_HUBER, 3.0, NAN, 0, 1, 100, 2, 0, 2e-3, 0, CF_SAMPLING_STRATIFIED};
+  cf_fit_options defaults;
+  cf_fit_default_options(&defaults, CF_MODEL_LAMBERT);
+  fit_settings set = {defaults.loss,          defaults.loss_scale, defaults.density,
+                      defaults.fit_exposures, defaults.multistart, defaults.max_iterations,
+                      defaults.threads,       defaults.footprint,  defaults.footprint_tolerance,
+                      defaults.budget,        defaults.sampling};
   long max_iterations = 100, threads = 2;
   cf_error err = {0};
   cf_status s = CF_OK;
@@ -286,8 +295,13 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
         break;
       case 'B': {
         long budget = 0;
-        s = cli_parse_count(optarg, "--budget", 100, 2000000000L, &budget, &err);
-        set.budget = (size_t)budget;
+        if (strcmp(optarg, "all") != 0 &&
+            cli_parse_count(optarg, "--budget", 100, 2000000000L, &budget, &err) != CF_OK)
+          s = cf_error_set(&err, CF_EINVAL,
+                           "--budget: '%s' is neither a number of observations (100 to 2e9) "
+                           "nor all",
+                           optarg);
+        set.budget = (size_t)budget; /* all: 0 */
         break;
       }
       case 'S': {

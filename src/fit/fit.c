@@ -51,6 +51,8 @@ void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   o->density = NAN;
   o->footprint = 0;
   o->footprint_tolerance = 2e-3;
+  o->budget = CF_FIT_DEFAULT_BUDGET;
+  o->sampling = CF_SAMPLING_STRATIFIED;
 }
 
 const char *cf_fit_stage_name(cf_fit_stage stage) {

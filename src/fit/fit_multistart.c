@@ -347,25 +347,28 @@ cf_status fit_start_sigma(const cf_capture *capture, const fit_population *popul
   return s;
 }
 
-/* Two starts that end far apart (in units of each parameter's range) with
- * costs within the noise of each other (Δcost < 1 in units of σ², that is
- * Δχ² < 2) make the fit ambiguous. */
+/* A start that ends far from the best (in units of each parameter's
+ * range) with a cost within the noise of the best's (Δcost < 1 in units
+ * of σ², that is Δχ² < 2) makes the fit ambiguous. (Two local minima far
+ * above the best that tie with each other do not: the demo's two at
+ * Δcost 134 above it did.) */
 int fit_ambiguous(const cf_fit_result *r, cf_model_id model, double sigma2) {
   const cf_model_info *m = cf_model_info_get(model);
-  for (int a = 0; a < r->starts; ++a)
-    for (int b = a + 1; b < r->starts; ++b) {
-      if (r->start[a].stopped || r->start[b].stopped) continue; /* a minimum found again */
-      if (fabs(r->start[a].cost - r->start[b].cost) / sigma2 >= 1.0) continue;
-      double distance = 0.0;
-      for (int j = 0; j < m->param_count; ++j) {
-        const cf_param_info *info = cf_param_info_get(m->params[j]);
-        for (int c = 0; c < info->components; ++c) {
-          int k = m->offsets[j] + c;
-          double d = (r->start[a].end[k] - r->start[b].end[k]) / (info->upper - info->lower);
-          distance = fmax(distance, fabs(d));
-        }
+  if (r->starts == 0) return 0;
+  int a = r->best_start;
+  for (int b = 0; b < r->starts; ++b) {
+    if (b == a || r->start[b].stopped) continue; /* a minimum found again */
+    if (fabs(r->start[a].cost - r->start[b].cost) / sigma2 >= 1.0) continue;
+    double distance = 0.0;
+    for (int j = 0; j < m->param_count; ++j) {
+      const cf_param_info *info = cf_param_info_get(m->params[j]);
+      for (int c = 0; c < info->components; ++c) {
+        int k = m->offsets[j] + c;
+        double d = (r->start[a].end[k] - r->start[b].end[k]) / (info->upper - info->lower);
+        distance = fmax(distance, fabs(d));
       }
-      if (distance > 0.05) return 1;
     }
+    if (distance > 0.05) return 1;
+  }
   return 0;
 }

@@ -23,9 +23,9 @@ cf_status fit_start_sigma(const cf_capture *capture, const fit_population *popul
                           const cf_fit_options *o, const double *params, double log_scale,
                           double *sigma, cf_error *err);
 
-/* Did two starts that ended far apart (more than 5 % of a parameter's
- * range) end within the noise of each other (Δcost < 1 in units of σ²,
- * that is Δχ² < 2)? */
+/* Did a start end far from the best (more than 5 % of a parameter's
+ * range) within the noise of its cost (Δcost < 1 in units of σ², that is
+ * Δχ² < 2)? Starts stopped at an earlier minimum do not count. */
 int fit_ambiguous(const cf_fit_result *r, cf_model_id model, double sigma2);
 
 #endif /* CLAYFIT_FIT_MULTISTART_H */

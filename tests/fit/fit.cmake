@@ -114,6 +114,9 @@ endforeach()
 # and 16 x 16 samples per pixel.
 clayfit_c_test(test_fit_footprint SOURCES fit/test_fit_footprint.c LIBS clayfit_fit_test_support
                LABELS fit)
+# the multi-start's ambiguity test, a private function of src/fit
+clayfit_c_test(test_fit_ambiguous SOURCES fit/test_fit_ambiguous.c LIBS clayfit_fit LABELS fit)
+target_include_directories(test_fit_ambiguous PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 clayfit_c_test(test_fit_hard_cases SOURCES fit/test_fit_hard_cases.c LIBS clayfit_fit_test_support
                LABELS fit)
 # The real DiLiGenT ball (skipped without ../shared/data): about a minute.
