@@ -4,7 +4,8 @@
  * AHEAD images beyond the one being added, while this thread adds each
  * image's observations in order (they append to the capture's arrays, and
  * their order is the images'). The first error in image order is the one
- * reported, as if the images were read one by one. */
+ * reported, as if the images were read one by one. One mask file for
+ * every image (DiLiGenT's) is decoded once. */
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,32 +24,49 @@ typedef struct decoded {
 
 typedef struct read_ahead {
   cf_capture *capture;
-  decoded *slots;            /* one per image */
+  decoded *slots; /* one per image */
+  /* one mask for every image: decoded once (its status and error stand
+   * for each image's) */
+  int one_mask;
+  cf_image shared_mask;
+  cf_status shared_status;
+  cf_error shared_err;
   size_t count, next, added; /* images; the next to decode; those added */
   int stop;
   pthread_mutex_t lock;
   pthread_cond_t changed;
 } read_ahead;
 
-static cf_status read_mask(const cf_capture *capture, size_t k, const cf_image *image,
-                           cf_image *mask, cf_error *err) {
-  const char *path = capture->spec.mask_paths[k];
-  cf_status s = cf_image_read(path, mask, NULL, err);
-  if (s == CF_OK && (mask->width != image->width || mask->height != image->height))
-    s = cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d", path,
-                     mask->width, mask->height, capture->spec.image_paths[k], image->width,
-                     image->height);
-  return s;
+static cf_status check_mask(const cf_capture *capture, size_t k, const cf_image *image,
+                            const cf_image *mask, cf_error *err) {
+  if (mask->width == image->width && mask->height == image->height) return CF_OK;
+  return cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d",
+                      capture->spec.mask_paths[k], mask->width, mask->height,
+                      capture->spec.image_paths[k], image->width, image->height);
 }
 
-/* Image k's pixels and mask (reads only the capture's file names). */
-static void decode(const cf_capture *capture, size_t k, decoded *d) {
+/* Image k's own mask, or the one every image shares. */
+static const cf_image *mask_of(const read_ahead *r, const decoded *d) {
+  if (!r->capture->spec.mask_paths) return NULL;
+  return r->one_mask ? &r->shared_mask : &d->mask;
+}
+
+/* Image k's pixels and mask (reads only the capture's file names and the
+ * shared mask). */
+static void decode(const read_ahead *r, size_t k, decoded *d) {
+  const cf_capture *capture = r->capture;
   const cf_capture_spec *spec = &capture->spec;
   d->status = cf_image_read(spec->image_paths[k], &d->image, &d->info, &d->err);
-  if (d->status == CF_OK)
+  if (d->status == CF_OK && d->info.is_float) /* integer samples are finite */
     d->status = cf_image_check_finite(&d->image, spec->image_paths[k], &d->err);
+  if (d->status == CF_OK && spec->mask_paths && r->one_mask && r->shared_status != CF_OK) {
+    d->status = r->shared_status;
+    d->err = r->shared_err;
+  } else if (d->status == CF_OK && spec->mask_paths && !r->one_mask) {
+    d->status = cf_image_read(spec->mask_paths[k], &d->mask, NULL, &d->err);
+  }
   if (d->status == CF_OK && spec->mask_paths)
-    d->status = read_mask(capture, k, &d->image, &d->mask, &d->err);
+    d->status = check_mask(capture, k, &d->image, mask_of(r, d), &d->err);
 }
 
 static void *reader(void *arg) {
@@ -60,7 +78,7 @@ static void *reader(void *arg) {
     if (r->stop || r->next >= r->count) break;
     size_t k = r->next++;
     pthread_mutex_unlock(&r->lock);
-    decode(r->capture, k, &r->slots[k]);
+    decode(r, k, &r->slots[k]);
     pthread_mutex_lock(&r->lock);
     r->slots[k].ready = 1;
     pthread_cond_broadcast(&r->changed);
@@ -70,7 +88,8 @@ static void *reader(void *arg) {
 }
 
 /* Image k's observations from its decoded pixels. */
-static cf_status add(cf_capture *capture, size_t k, decoded *d, cf_error *err) {
+static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *mask,
+                     cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
   if (d->status != CF_OK) {
     *err = d->err;
@@ -89,8 +108,7 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, cf_error *err) {
     capture->raw_exposures[k] = exposure;
     capture->images[k].exposure = exposure;
     cf_decode decoding = capture_image_decode(capture, &d->info, exposure);
-    s = capture_add_observations(capture, k, &d->image, d->mask.pixels ? &d->mask : NULL, &decoding,
-                                 err);
+    s = capture_add_observations(capture, k, &d->image, mask, &decoding, err);
   }
   return s;
 }
@@ -98,15 +116,22 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, cf_error *err) {
 cf_status capture_read_images(cf_capture *capture, const cf_capture_options *options,
                               cf_error *err) {
   size_t n = capture->spec.num_images;
-  read_ahead r = {capture,
-                  calloc(n ? n : 1, sizeof(decoded)),
-                  n,
-                  0,
-                  0,
-                  0,
-                  PTHREAD_MUTEX_INITIALIZER,
-                  PTHREAD_COND_INITIALIZER};
-  if (!r.slots) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
+  read_ahead r;
+  memset(&r, 0, sizeof r);
+  r.capture = capture;
+  r.slots = calloc(n ? n : 1, sizeof(decoded));
+  r.count = n;
+  pthread_mutex_init(&r.lock, NULL);
+  pthread_cond_init(&r.changed, NULL);
+  if (!r.slots) {
+    pthread_mutex_destroy(&r.lock);
+    pthread_cond_destroy(&r.changed);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
+  }
+  const char *const *masks = (const char *const *)capture->spec.mask_paths;
+  r.one_mask = masks && n > 1;
+  for (size_t k = 1; r.one_mask && k < n; ++k) r.one_mask = strcmp(masks[k], masks[0]) == 0;
+  if (r.one_mask) r.shared_status = cf_image_read(masks[0], &r.shared_mask, NULL, &r.shared_err);
   pthread_t threads[READERS];
   int started = 0;
   for (; started < READERS && (size_t)started < n; ++started)
@@ -119,7 +144,7 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
     pthread_mutex_lock(&r.lock);
     while (!r.slots[k].ready) pthread_cond_wait(&r.changed, &r.lock);
     pthread_mutex_unlock(&r.lock);
-    s = add(capture, k, &r.slots[k], err);
+    s = add(capture, k, &r.slots[k], mask_of(&r, &r.slots[k]), err);
     cf_image_free(&r.slots[k].image);
     cf_image_free(&r.slots[k].mask);
     pthread_mutex_lock(&r.lock);
@@ -137,6 +162,7 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
     cf_image_free(&r.slots[k].mask);
   }
   free(r.slots);
+  cf_image_free(&r.shared_mask);
   pthread_mutex_destroy(&r.lock);
   pthread_cond_destroy(&r.changed);
   if (s == CF_OK && options && options->progress)

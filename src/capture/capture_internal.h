@@ -40,6 +40,8 @@ struct cf_capture {
   cf_ellipse circle;        /* orthographic + silhouettes */
   cf_image normal_map;      /* orthographic + normal map, normalised */
   uint8_t *map_class;       /* its pixels: a surface_hit each */
+  int map_box[4];           /* the box of its pixels not SURFACE_MISS:
+                               x0, y0, x1, y1 (exclusive) */
 
   cf_observations obs;
   size_t obs_capacity;

@@ -215,6 +215,15 @@ static cf_status classify_normal_map(cf_capture *capture, cf_error *err) {
   }
   free(has);
   capture->map_class = class;
+  int *box = capture->map_box;
+  box[0] = map->width, box[1] = map->height, box[2] = 0, box[3] = 0;
+  for (int y = 0; y < map->height; ++y)
+    for (int x = 0; x < map->width; ++x) {
+      if (class[(size_t)y * (size_t)map->width + (size_t)x] == SURFACE_MISS) continue;
+      box[0] = x < box[0] ? x : box[0], box[1] = y < box[1] ? y : box[1];
+      box[2] = x + 1 > box[2] ? x + 1 : box[2], box[3] = y + 1 > box[3] ? y + 1 : box[3];
+    }
+  if (box[2] <= box[0]) box[0] = box[1] = box[2] = box[3] = 0; /* no surface at all */
   return CF_OK;
 }
 
@@ -336,6 +345,23 @@ surface_hit capture_surface_at(const cf_capture *capture, size_t k, int x, int y
 void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int height,
                             int bounds[4]) {
   bounds[0] = 0, bounds[1] = 0, bounds[2] = width, bounds[3] = height;
+  if (capture->spec.camera == CF_CAMERA_KIND_ORTHOGRAPHIC) {
+    double box[4]; /* the normal map's surface, or the circle's box padded by 2 pixels */
+    if (capture->spec.geometry == CF_GEOMETRY_NORMAL_MAP) {
+      for (int i = 0; i < 4; ++i) box[i] = capture->map_box[i];
+    } else {
+      const cf_ellipse *e = &capture->circle;
+      double r = fmax(e->a, e->b) + 2.0;
+      box[0] = floor(e->cx - r), box[1] = floor(e->cy - r);
+      box[2] = ceil(e->cx + r), box[3] = ceil(e->cy + r);
+    }
+    if (!(box[0] <= box[2] && box[1] <= box[3])) return; /* NaN: keep everything */
+    bounds[0] = (int)fmax(0.0, fmin(box[0], width));
+    bounds[1] = (int)fmax(0.0, fmin(box[1], height));
+    bounds[2] = (int)fmax(bounds[0], fmin(box[2], width));
+    bounds[3] = (int)fmax(bounds[1], fmin(box[3], height));
+    return;
+  }
   if (capture->spec.camera != CF_CAMERA_KIND_COLMAP) return;
   /* project 64 points of the tangent cone's circle; pad by 2 pixels */
   const capture_view *view = &capture->views[k];

@@ -24,6 +24,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -87,11 +88,38 @@ void info_fill(cf_image_info *info, const OIIO::ImageInput &input, const OIIO::I
   OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
   info->is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
                    base == OIIO::TypeDesc::DOUBLE;
+  for (const OIIO::TypeDesc &channel : spec.channelformats) /* per-channel formats */
+    info->is_float |= channel.basetype == OIIO::TypeDesc::HALF ||
+                      channel.basetype == OIIO::TypeDesc::FLOAT ||
+                      channel.basetype == OIIO::TypeDesc::DOUBLE;
   info->bits_per_sample = int(spec.format.basesize() * 8);
   info->exposure_time = positive_attribute(spec, "ExposureTime");
   info->f_number = positive_attribute(spec, "FNumber");
   info->iso = positive_attribute(spec, "Exif:PhotographicSensitivity");
   if (std::isnan(info->iso)) info->iso = positive_attribute(spec, "Exif:ISOSpeedRatings");
+}
+
+/* Integer samples scaled to [0, 1] as OpenImageIO's conversion to FLOAT
+ * does (v × (1 / max), bit for bit), in a loop the compiler vectorises:
+ * OpenImageIO's own took a seventh of loading DiLiGenT's 96 16-bit PNGs. */
+template <typename T>
+bool read_scaled(OIIO::ImageInput &input, const OIIO::ImageSpec &spec, OIIO::TypeDesc type,
+                 float *pixels) {
+  const size_t values = size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels);
+  std::unique_ptr<T[]> stored(new T[values]); /* not zeroed: read over */
+  if (!input.read_image(0, 0, 0, spec.nchannels, type, stored.get())) return false;
+  const float scale = 1.0f / float(std::numeric_limits<T>::max());
+  for (size_t i = 0; i < values; ++i) pixels[i] = float(stored[i]) * scale;
+  return true;
+}
+
+/* Every sample as float, integer ones scaled to [0, 1]. */
+bool read_pixels(OIIO::ImageInput &input, const OIIO::ImageSpec &spec, float *pixels) {
+  if (spec.channelformats.empty() && spec.format == OIIO::TypeDesc::UINT16)
+    return read_scaled<uint16_t>(input, spec, OIIO::TypeDesc::UINT16, pixels);
+  if (spec.channelformats.empty() && spec.format == OIIO::TypeDesc::UINT8)
+    return read_scaled<uint8_t>(input, spec, OIIO::TypeDesc::UINT8, pixels);
+  return input.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels);
 }
 
 cf_status read_image(const char *path, cf_image *image, cf_image_info *info, cf_error *err) {
@@ -140,7 +168,7 @@ cf_status read_image(const char *path, cf_image *image, cf_image_info *info, cf_
     cf_error_prefix(err, "%s", path);
     return status;
   }
-  if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image->pixels)) {
+  if (!read_pixels(*input, spec, image->pixels)) {
     cf_image_free(image);
     return cf_error_set(err, CF_EIO, "%s: cannot read the pixels: %s", path,
                         one_line(input->geterror()).c_str());

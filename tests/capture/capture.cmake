@@ -49,6 +49,8 @@ bad_capture(unknown_camera "camera.model.*cameras.txt:[0-9]+.*PINHOLE_WITH_WOBBL
 bad_capture(nan_exr "nan_exr/images/000.exr: .*NaN at pixel \\(20, 10\\), channel 1")
 bad_capture(wrong_type "capture.json: lights: expected an array, got an object")
 bad_capture(missing_field "capture.json: \\(top level\\): missing required key 'colour'")
+bad_capture(missing_mask "missing_mask/nope.png.*(no such file|not found|does not exist)")
+bad_capture(mask_size "mask_size/mask.png: the mask is 80 x 60 pixels but .*000.exr is 96 x 72")
 bad_capture(unseen_sphere "capture.json: geometry: the sphere \\(centre 0 0 -40, radius 1\\) is seen by none of the 2 cameras")
 
 # What synth and inspect write, against data_schema/; the capture files in

@@ -9,6 +9,8 @@
  *   wrong_type        the capture file: lights is an object
  *   missing_field     the capture file: the colour block deleted
  *   unseen_sphere     the sphere behind every camera
+ *   missing_mask      one mask for every image, its file absent
+ *   mask_size         one mask for every image, of another size
  * usage: make_bad_captures DIR */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
@@ -121,6 +123,20 @@ int main(int argc, char **argv) {
   if (edit(dir, "capture.json", "\"center\": [\n      0.0,\n      0.0,\n      0.0",
            "\"center\": [\n      0.0,\n      0.0,\n      -40.0"))
     return 1;
-  printf("make_bad_captures: 8 broken captures in %s\n", root);
+  if (synth(root, "missing_mask", dir, sizeof dir)) return 1;
+  if (edit(dir, "capture.json", "\"directory\": \"images\",",
+           "\"directory\": \"images\", \"mask\": \"nope.png\","))
+    return 1;
+
+  if (synth(root, "mask_size", dir, sizeof dir)) return 1;
+  if (edit(dir, "capture.json", "\"directory\": \"images\",",
+           "\"directory\": \"images\", \"mask\": \"mask.png\","))
+    return 1;
+  cf_image mask = {0};
+  snprintf(path, sizeof path, "%s/mask.png", dir);
+  if (cf_image_alloc(&mask, 80, 60, 1, &err) != CF_OK || cf_image_write(path, &mask, 8, &err))
+    return fail(path, &err);
+  cf_image_free(&mask);
+  printf("make_bad_captures: 10 broken captures in %s\n", root);
   return 0;
 }
