@@ -112,9 +112,53 @@ static void fit_candidates(const cf_capture *capture, const cf_fit_options optio
   choice->count = CF_MODEL_COUNT;
 }
 
-/* BIC and the held-out scores at the common σ. */
+/* One candidate's scores on the training and held-out parts. */
+typedef struct score_work {
+  const cf_capture *capture;
+  const fit_population *train, *test;
+  cf_fit_choice *choice;
+  cf_fit_options options; /* the loss of the scores */
+  cf_status status[CF_MODEL_COUNT];
+  cf_error err[CF_MODEL_COUNT];
+} score_work;
+
+static void score_candidate(void *user, int m) {
+  score_work *w = user;
+  cf_fit_candidate *c = &w->choice->candidate[m];
+  cf_error *err = &w->err[m];
+  double train_cost, test_cost;
+  cf_fit_result on_train, on_test;
+  cf_status s = fit_score_at(w->capture, w->train, &c->fit, w->choice->sigma, &w->options,
+                             &train_cost, &on_train, err);
+  if (s == CF_OK) {
+    cf_fit_result_free(&on_train);
+    s = fit_score_at(w->capture, w->test, &c->fit, w->choice->sigma, &w->options, &test_cost,
+                     &on_test, err);
+  }
+  w->status[m] = s;
+  if (s != CF_OK) return;
+  size_t train_n = on_train.residuals + on_train.censored;
+  c->heldout_residuals = on_test.residuals + on_test.censored;
+  c->parameters = c->fit.free_unknowns;
+  c->residuals = train_n;
+  c->cost = train_cost;
+  c->bic = 2.0 * train_cost + c->parameters * log((double)train_n);
+  c->heldout_score = sqrt(2.0 * test_cost / (double)c->heldout_residuals);
+  c->heldout_rmse = on_test.residuals ? on_test.rmse : NAN;
+  c->heldout_relative_rmse = on_test.relative_rmse;
+  cf_fit_result_free(&on_test);
+}
+
+static void score_if_fitted(void *user, int m) {
+  score_work *w = user;
+  w->status[m] = CF_OK;
+  if (w->choice->candidate[m].ok) score_candidate(user, m);
+}
+
+/* BIC and the held-out scores at the common σ, the candidates side by
+ * side; the first failure in ladder order is the one reported. */
 static cf_status score_candidates(const cf_capture *capture, const fit_population *train,
-                                  const fit_population *test, cf_fit_choice *choice,
+                                  const fit_population *test, int threads, cf_fit_choice *choice,
                                   cf_error *err) {
   int has_noise = fit_capture_has_noise(capture);
   choice->sigma = 0.0;
@@ -125,33 +169,25 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
   }
   if (!has_noise && !(choice->sigma > 0.0))
     return cf_error_set(err, CF_ENUMERIC, "no model of the ladder could be fitted to choose from");
-  cf_fit_options o; /* the loss of the scores */
-  cf_fit_default_options(&o, CF_MODEL_LAMBERT);
-  o.loss = choice->loss;
-  o.loss_scale = choice->loss_scale;
-  for (int m = 0; m < choice->count; ++m) {
-    cf_fit_candidate *c = &choice->candidate[m];
-    if (!c->ok) continue;
-    double train_cost, test_cost;
-    cf_fit_result on_train, on_test;
-    cf_status s =
-        fit_score_at(capture, train, &c->fit, choice->sigma, &o, &train_cost, &on_train, err);
-    if (s != CF_OK) return s;
-    cf_fit_result_free(&on_train);
-    s = fit_score_at(capture, test, &c->fit, choice->sigma, &o, &test_cost, &on_test, err);
-    if (s != CF_OK) return s;
-    size_t train_n = on_train.residuals + on_train.censored;
-    c->heldout_residuals = on_test.residuals + on_test.censored;
-    c->parameters = c->fit.free_unknowns;
-    c->residuals = train_n;
-    c->cost = train_cost;
-    c->bic = 2.0 * train_cost + c->parameters * log((double)train_n);
-    c->heldout_score = sqrt(2.0 * test_cost / (double)c->heldout_residuals);
-    c->heldout_rmse = on_test.residuals ? on_test.rmse : NAN;
-    c->heldout_relative_rmse = on_test.relative_rmse;
-    cf_fit_result_free(&on_test);
-  }
-  return CF_OK;
+  score_work *w = calloc(1, sizeof *w);
+  if (!w) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  w->capture = capture;
+  w->train = train;
+  w->test = test;
+  w->choice = choice;
+  cf_fit_default_options(&w->options, CF_MODEL_LAMBERT);
+  w->options.loss = choice->loss;
+  w->options.loss_scale = choice->loss_scale;
+  w->options.threads = threads >= 2 ? 1 : threads; /* each candidate on one thread */
+  fit_parallel_for(choice->count, threads, score_if_fitted, w);
+  cf_status s = CF_OK;
+  for (int m = 0; m < choice->count && s == CF_OK; ++m)
+    if (w->status[m] != CF_OK) {
+      s = w->status[m];
+      *err = w->err[m];
+    }
+  free(w);
+  return s;
 }
 
 /* Up the ladder: a richer model replaces the choice only when clearly
@@ -211,7 +247,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   choice->heldout_observations = split.test_count;
   if (s == CF_OK) {
     fit_candidates(capture, options, &train, choice);
-    s = score_candidates(capture, &train, &test, choice, err);
+    s = score_candidates(capture, &train, &test, fit_threads(&options[0]), choice, err);
   }
   if (s == CF_OK) walk_ladder(choice);
   split_free(&split);
