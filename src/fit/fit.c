@@ -281,6 +281,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   s = fit_problem_init(&p, capture, o->model, population->index, population->count, err);
   if (s != CF_OK) return s;
   if (population->weight) s = fit_problem_set_sample_weights(&p, population->weight, err);
+  p.threads = fit_threads(o);
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
   p.radius = radius;

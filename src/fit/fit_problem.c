@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fit_parallel.h"
 #include "order_statistics.h"
 
 enum { BLOCK_SIZE = 1024 };
@@ -95,6 +96,7 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->loss_scale = 3.0;
   p->response = 1.0;
   p->block_size = BLOCK_SIZE;
+  p->threads = 1;
   cf_model_default_params(model, p->params);
   size_t pairs = p->count * (size_t)p->lights;
   p->slots = pairs;
@@ -674,27 +676,62 @@ int fit_problem_block_columns(void *user, size_t block, const int **columns) {
   return (int)(p->block_column_begin[block + 1] - p->block_column_begin[block]);
 }
 
-cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,
-                              cf_error *err) {
-  double *f = malloc(3 * (p->slots ? p->slots : 1) * sizeof *f);
-  if (!f) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  cf_eval_batch(p->model, p->params, p->slots, p->geometry, f, NULL);
-  for (size_t i = 0; i < p->count; ++i) {
+/* A range of rows' predictions (fit_problem_predict), on one thread. */
+typedef struct predict_job {
+  const fit_problem *p;
+  double *prediction, *measured;
+  size_t rows_per_part;
+  int failed;
+} predict_job;
+
+static void predict_part(void *user, int part) {
+  predict_job *job = user;
+  const fit_problem *p = job->p;
+  size_t begin = (size_t)part * job->rows_per_part;
+  size_t end = begin + job->rows_per_part < p->count ? begin + job->rows_per_part : p->count;
+  if (begin >= end) return;
+  size_t first_pair, last_pair;
+  fit_problem_slot_range(p, begin, &first_pair);
+  size_t last_slots = fit_problem_slot_range(p, end - 1, &last_pair);
+  size_t pairs = last_pair + last_slots - first_pair;
+  double *f = malloc(3 * (pairs ? pairs : 1) * sizeof *f);
+  if (!f) {
+    job->failed = 1;
+    return;
+  }
+  cf_eval_batch(p->model, p->params, pairs, p->geometry + first_pair, f, NULL);
+  uint32_t gain_image = UINT32_MAX;
+  double gain = 0.0;
+  for (size_t i = begin; i < end; ++i) {
     size_t first;
     size_t slots = fit_problem_slot_range(p, i, &first);
-    double gain = exp(p->log_scale + p->log_exposures[p->image[i]]);
+    if (p->image[i] != gain_image) {
+      gain_image = p->image[i];
+      gain = exp(p->log_scale + p->log_exposures[gain_image]);
+    }
     for (int c = 0; c < 3; ++c) {
       double value = 0.0;
       for (size_t pair = first; pair < first + slots; ++pair)
-        value += p->weight[3 * pair + (size_t)c] * f[3 * pair + (size_t)c];
+        value += p->weight[3 * pair + (size_t)c] * f[3 * (pair - first_pair) + (size_t)c];
       double linear = gain * value;
-      prediction[3 * i + (size_t)c] =
+      job->prediction[3 * i + (size_t)c] =
           p->response_on ? (linear > 0.0 ? pow(linear, p->response) : 0.0) : linear;
-      measured[3 * i + (size_t)c] = p->y[3 * i + (size_t)c];
+      job->measured[3 * i + (size_t)c] = p->y[3 * i + (size_t)c];
     }
   }
   free(f);
-  return CF_OK;
+}
+
+cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *measured,
+                              cf_error *err) {
+  /* parts of whole blocks, one per thread, for a population worth it */
+  int parts = p->threads > 1 && p->count >= 4 * (size_t)p->block_size ? p->threads : 1;
+  size_t blocks = (p->count + p->block_size - 1) / p->block_size;
+  predict_job job = {p, prediction, measured,
+                     ((blocks + (size_t)parts - 1) / (size_t)parts) * p->block_size, 0};
+  if (job.rows_per_part == 0) job.rows_per_part = 1;
+  fit_parallel_for(parts, parts, predict_part, &job);
+  return job.failed ? cf_error_set(err, CF_ENOMEM, "out of memory") : CF_OK;
 }
 
 cf_status fit_problem_init_sample(fit_problem *p, fit_sample *sample, const cf_capture *capture,

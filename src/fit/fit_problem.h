@@ -102,6 +102,9 @@ typedef struct fit_problem {
   /* the solves' relative function tolerance and least relative decrease
    * of a step (0: lsq.h's defaults) */
   double function_tolerance, min_relative_decrease;
+  /* threads for a prediction over every observation (fit_problem_predict;
+   * 1 from fit_problem_init: a problem solved beside others keeps to one) */
+  int threads;
   /* optional: ends a solve early (lsq.h's cf_lsq_options.stop) */
   int (*stop)(void *user, const double *x, double cost);
   void *stop_user;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "fit_footprint.h"
+#include "fit_plan.h"
 #include "order_statistics.h"
 
 /* Per image, the observation with the brightest measurement (−1: none). */
@@ -151,6 +152,7 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
     p->log_exposures[k] = log(fit->exposures[k]);
   p->loss = o->loss;
   p->loss_scale = o->loss_scale;
+  p->threads = fit_threads(o);
   fit_problem_clear_unknowns(p);
   s = fit_problem_finish(p, err);
   if (s == CF_OK) s = fit_footprint_update(p, capture, o, NULL, err);

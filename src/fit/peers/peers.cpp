@@ -639,6 +639,10 @@ int Run(int argc, char **argv) {
     json_decref(note);
   }
   std::printf(
+      "\nthe callback's pass (value + normal equations, one thread): %.4f s, %.2f x the "
+      "evaluator's",
+      cr.normal_pass_seconds, cr.normal_pass_seconds / cr.pass_seconds);
+  std::printf(
       "\nevaluator floor: one cf_eval_batch pass (value + gradient) over %zu pairs %.4f s x "
       "%d iterations = %.3f s; clayfit %.3f s (solve %.3f s): overhead %.2f over the floor "
       "(%.2f for the solve alone)\n",
@@ -661,11 +665,13 @@ int Run(int argc, char **argv) {
         "\"lights\": %d,\n  \"threads\": %d,\n  \"start\": %s,\n  \"cost_tolerance\": %g,\n  "
         "\"model_tolerance\": %g,\n  \"templated_model_error\": %.6g,\n  \"floor\": "
         "{\"pass_seconds\": %.6g, \"pairs\": %zu, \"iterations\": %d, \"seconds\": %.6g, "
-        "\"clayfit_overhead\": %.6g, \"clayfit_solve_overhead\": %.6g},\n  \"contestants\": "
+        "\"clayfit_overhead\": %.6g, \"clayfit_solve_overhead\": %.6g, "
+        "\"normal_pass_seconds\": %.6g},\n  \"contestants\": "
         "[\n%s\n  ]\n}\n",
         o.capture.c_str(), code, d.count, d.lights, o.threads, JsonArray(start).c_str(),
         kCostTolerance, kModelTolerance, templated_error, cr.pass_seconds, cr.pairs, cr.iterations,
-        floor, cr.seconds / floor - 1.0, cr.solve_seconds / floor - 1.0, rows.c_str());
+        floor, cr.seconds / floor - 1.0, cr.solve_seconds / floor - 1.0, cr.normal_pass_seconds,
+        rows.c_str());
     if (std::fclose(f) != 0) return 1;
   }
   if (model_failed) return 1;

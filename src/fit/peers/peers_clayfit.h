@@ -23,10 +23,15 @@ typedef struct peers_clayfit_result {
   double seconds;            /* wall: problem set-up and solve */
   double solve_seconds;      /* wall: the solve alone */
   char termination[64];
-  double pass_seconds; /* one cf_eval_batch pass, value + gradient, over
-                          every (observation, light) pair (the best of
-                          several) */
-  size_t pairs;        /* those pairs */
+  double pass_seconds;        /* one cf_eval_batch pass, value + gradient, over
+                                 every (observation, light) pair (the best of
+                                 several) */
+  size_t pairs;               /* those pairs */
+  double normal_pass_seconds; /* one pass of the fit's callback (lsq.h)
+                                 over every block, value and normal
+                                 equations JᵀJ, Jᵀr, on one thread (the
+                                 best of several): the evaluator and the
+                                 sums the solver needs */
 } peers_clayfit_result;
 
 /* Solve the common problem: the `count` observations of index, unweighted
