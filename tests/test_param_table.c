@@ -76,6 +76,16 @@ int main(void) {
   CHECK(cf_params_check(CF_MODEL_CLAY, p, &err) == CF_EINVAL, "NaN");
   CHECK(strstr(err.message, "optical_depth[g]") != NULL, "message: %s", err.message);
 
+  /* a slot's error in units of max(|truth|, its range's width): optical
+   * depth's range is [0, 8], film F0's [0.01, 0.25] */
+  double e = cf_model_slot_error(CF_MODEL_CLAY, CF_CLAY_OPTICAL_DEPTH + 2, 0.5, 0.1);
+  CHECK(fabs(e - 0.4 / 8.0) < 1e-15, "optical depth error %.17g", e);
+  e = cf_model_slot_error(CF_MODEL_CLAY, CF_CLAY_FILM_F0, 0.02, 0.03);
+  CHECK(fabs(e - 0.01 / 0.24) < 1e-15, "film F0 error %.17g", e);
+  e = cf_model_slot_error(CF_MODEL_CLAY, CF_CLAY_OPTICAL_DEPTH, 30.0, 20.0);
+  CHECK(fabs(e - 0.5) < 1e-15, "an error beyond the range's width: %.17g", e);
+  CHECK(isnan(cf_model_slot_error(CF_MODEL_LAMBERT, 3, 0.0, 0.0)), "M0 has no slot 3");
+
   CHECK(strcmp(cf_status_name(CF_ERANGE), "ERANGE") == 0, "status name");
   CHECK(strcmp(cf_status_message(CF_ENOMEM), "out of memory") == 0, "status message");
   return check_finish("test_param_table");

@@ -195,6 +195,12 @@ cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
  * written into buf (at least 32 bytes); returns buf. */
 const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size);
 
+/* The error of a fitted value of vector entry k against the truth in
+ * units of max(|truth|, the width of the parameter's range): the scale on
+ * which clayfit's benchmark and tests judge a recovered parameter. NaN
+ * for an entry the model does not have. */
+double cf_model_slot_error(cf_model_id model, int k, double fitted, double truth);
+
 /* Fill params (model dim entries) with every parameter's default. */
 void cf_model_default_params(cf_model_id model, double *params);
 

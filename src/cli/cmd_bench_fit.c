@@ -79,16 +79,9 @@ static void usage(FILE *out) {
 /* The worst error of a fit against the truth over the model's slots, in
  * units of max(|truth|, range width). */
 static double worst_error(cf_model_id model, const double *fitted, const double *truth) {
-  const cf_model_info *m = cf_model_info_get(model);
   double worst = 0.0;
-  for (int j = 0; j < m->param_count; ++j) {
-    const cf_param_info *info = cf_param_info_get(m->params[j]);
-    for (int c = 0; c < info->components; ++c) {
-      int k = m->offsets[j] + c;
-      double scale = fmax(fabs(truth[k]), info->upper - info->lower);
-      worst = fmax(worst, fabs(fitted[k] - truth[k]) / scale);
-    }
-  }
+  for (int k = 0; k < cf_model_info_get(model)->dim; ++k)
+    worst = fmax(worst, cf_model_slot_error(model, k, fitted[k], truth[k]));
   return worst;
 }
 

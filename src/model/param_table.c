@@ -126,6 +126,14 @@ const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size)
   return buf;
 }
 
+double cf_model_slot_error(cf_model_id model, int k, double fitted, double truth) {
+  const cf_model_info *m = cf_model_info_get(model);
+  int channel = 0;
+  const cf_param_info *p = (m && k >= 0 && k < m->dim) ? slot_owner(m, k, &channel) : NULL;
+  if (!p) return NAN;
+  return fabs(fitted - truth) / fmax(fabs(truth), p->upper - p->lower);
+}
+
 void cf_model_default_params(cf_model_id model, double *params) {
   const cf_model_info *m = cf_model_info_get(model);
   if (!m) return;

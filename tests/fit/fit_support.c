@@ -96,14 +96,6 @@ int fit_test_edit_text(const char *folder, const char *file, const char *from, c
   return ok;
 }
 
-double fit_test_error(cf_model_id model, int k, double fitted, double truth) {
-  const cf_model_info *m = cf_model_info_get(model);
-  const cf_param_info *info = NULL;
-  for (int j = 0; j < m->param_count; ++j)
-    if (k >= m->offsets[j]) info = cf_param_info_get(m->params[j]);
-  return fabs(fitted - truth) / fmax(fabs(truth), info->upper - info->lower);
-}
-
 void fit_test_fit_options(cf_fit_options *o, cf_model_id model, int supersample) {
   cf_fit_default_options(o, model);
   o->footprint = supersample;

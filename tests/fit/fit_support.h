@@ -44,7 +44,4 @@ int fit_test_edit_images(const char *folder, const char *sub, int images, int bi
 /* Replace the first `from` in folder/file by `to`; 0 (CHECKed) if absent. */
 int fit_test_edit_text(const char *folder, const char *file, const char *from, const char *to);
 
-/* |fitted − truth| over max(|truth|, the range's width) of slot k. */
-double fit_test_error(cf_model_id model, int k, double fitted, double truth);
-
 #endif /* CLAYFIT_TEST_FIT_SUPPORT_H */

@@ -35,7 +35,7 @@ static double worst_error(const char *name, cf_capture *capture, int footprint) 
   double worst = 0.0;
   int worst_slot = 0;
   for (int k = 0; k < m->dim; ++k) {
-    double error = fit_test_error(CF_MODEL_DIELECTRIC, k, r.params[k], truth[k]);
+    double error = cf_model_slot_error(CF_MODEL_DIELECTRIC, k, r.params[k], truth[k]);
     CHECK(isfinite(error), "%s: slot %d = %g", name, k, r.params[k]);
     if (error > worst) worst = error, worst_slot = k;
   }

@@ -145,7 +145,7 @@ static void half_clipped(void) {
   printf("    clip level %.4g (half the dimmest image's peak)\n", level);
   CHECK(r.censored > 0, "half_clipped: nothing censored");
   for (int k = 0; k < 6; ++k)
-    CHECK(fit_test_error(CF_MODEL_DIELECTRIC, k, r.params[k], m2_truth[k]) < 1e-4,
+    CHECK(cf_model_slot_error(CF_MODEL_DIELECTRIC, k, r.params[k], m2_truth[k]) < 1e-4,
           "half_clipped: slot %d fitted %.9g, truth %g", k, r.params[k], m2_truth[k]);
   cf_fit_result_free(&r);
 }
@@ -285,7 +285,7 @@ static void outliers(void) {
   if (!fit("outliers", fit_test_load(folder), CF_MODEL_DIELECTRIC, 1, &r)) return;
   printf("    %zu pixels brightened\n", count);
   for (int k = 0; k < 6; ++k)
-    CHECK(fit_test_error(CF_MODEL_DIELECTRIC, k, r.params[k], m2_truth[k]) < 0.01,
+    CHECK(cf_model_slot_error(CF_MODEL_DIELECTRIC, k, r.params[k], m2_truth[k]) < 0.01,
           "outliers: slot %d fitted %.6g, truth %g", k, r.params[k], m2_truth[k]);
   CHECK(r.rejected >= r.residuals / 25, "outliers: only %zu of %zu residuals beyond the loss",
         r.rejected, r.residuals);

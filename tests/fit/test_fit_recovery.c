@@ -61,7 +61,7 @@ static void recover(const truth_case *c, const char *dir) {
     for (int j = 0; j < m->param_count; ++j) {
       const cf_param_info *info = cf_param_info_get(m->params[j]);
       for (int k = m->offsets[j]; k < m->offsets[j] + info->components; ++k) {
-        double error = fit_test_error(c->model, k, r.params[k], c->params[k]);
+        double error = cf_model_slot_error(c->model, k, r.params[k], c->params[k]);
         char name[48];
         CHECK(error <= tolerance && r.status[k] == CF_PARAM_FITTED,
               "%s %s: fitted %.9g, truth %.9g (error %.3g of its scale; %s)", m->code,
