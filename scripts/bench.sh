@@ -12,6 +12,7 @@
 #                                the scaling;
 #   scripts/bench_peers.sh       Ceres AutoDiff, NumericDiff and SciPy on the
 #                                same observations (bench/PEERS.md);
+#   clayfit --version            the process start (the best of five);
 # and writes bench/RESULTS.md and bench/speed_error.svg (the curve). Numbers
 # are reported, never asserted; the machine is shared, so runs vary (up to
 # about 1.5x).
@@ -32,6 +33,17 @@ if [ -d ../shared/data/diligent_ball ]; then
 fi
 "$clayfit" bench fit --work "$out" --json "$out/fit.json" "${extra[@]}" | tee "$out/fit.txt"
 bash scripts/bench_peers.sh build/release
+# the process start: the best of five `clayfit --version`
+start=$(python3 - "$clayfit" <<'PY'
+import subprocess, sys, time
+best = float("inf")
+for _ in range(5):
+    t = time.perf_counter()
+    subprocess.run([sys.argv[1], "--version"], stdout=subprocess.DEVNULL, check=True)
+    best = min(best, time.perf_counter() - t)
+print(f"{best:.4f}")
+PY
+)
 python3 scripts/bench_report.py "$out/eval.json" "$out/fit.json" bench/PEERS.md \
-  bench/RESULTS.md bench/speed_error.svg
+  bench/RESULTS.md bench/speed_error.svg "$start"
 echo "bench: bench/RESULTS.md, bench/speed_error.svg"

@@ -72,6 +72,7 @@ def plot(runs, path):
 
 def main():
     eval_path, fit_path, peers_path, results_path, plot_path = sys.argv[1:6]
+    start_seconds = float(sys.argv[6]) if len(sys.argv) > 6 else None
     with open(fit_path) as f:
         fit = json.load(f)
     with open(eval_path) as f:
@@ -128,6 +129,13 @@ def main():
               f"Over the synthetic captures with every observation: time ~ n^{fmt(sc['time_exponent'], '.2f')}, "
               f"peak memory ~ n^{fmt(sc['memory_exponent'], '.2f')}, "
               f"{fmt(sc['bytes_per_observation'], '.0f')} bytes of peak memory per observation.", "",
+              *([f"## Process start", "",
+                 f"Starting a `clayfit` process (`clayfit --version`, the best of 5) takes "
+                 f"{start_seconds:.2f} s, almost all of it the dynamic loader binding "
+                 "OpenImageIO's shared libraries (Debian's build links about 260, FFmpeg, "
+                 "OpenVDB, GDAL and DCMTK among them). Every `clayfit` command pays it once; "
+                 "the times above do not include it (each run is a child forked from a "
+                 "process that has already loaded them).", ""] if start_seconds is not None else []),
               "## The evaluator alone (`clayfit bench eval`)", "",
               "```", json.dumps(ev, indent=1)[:3000], "```", ""]
     if os.path.exists(peers_path):
