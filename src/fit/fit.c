@@ -337,7 +337,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
       s = fit_declare(&p, &plan, err);
       if (s == CF_OK) s = fit_solve(&p, o, o->max_iterations, &summary, err);
     }
-    if (s == CF_OK) s = fit_normal_matrix(&p, fit_threads(o), jtj, err);
+    if (s == CF_OK) s = fit_normal_equations(&p, fit_threads(o), jtj, NULL, err);
     if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
     if (s == CF_OK && !rank_deficient)
       s = fit_sample_covariance(&p, fit_threads(o), covariance, err);

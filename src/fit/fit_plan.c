@@ -93,19 +93,26 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   return s;
 }
 
+cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu,
+                               cf_error *err) {
+  double x[FIT_MAX_FREE], cost;
+  fit_problem_get_x(p, x);
+  cf_lsq_problem problem;
+  fit_lsq_problem(p, x, &problem);
+  if (!cf_lsq_normal_equations(&problem, threads, jtj, jtu, &cost))
+    return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
+  return CF_OK;
+}
+
 cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
                                cf_error *err) {
   enum { MOST = 64 };
   int n = p->num_unknowns;
   *decrement = HUGE_VAL;
   if (n > MOST) return CF_OK;
-  double x[FIT_MAX_FREE], jtj[MOST * MOST], g[MOST], h[MOST * MOST], values[MOST],
-      vectors[MOST * MOST], cost;
-  fit_problem_get_x(p, x);
-  cf_lsq_problem problem;
-  fit_lsq_problem(p, x, &problem);
-  if (!cf_lsq_normal_equations(&problem, fit_threads(o), jtj, g, &cost))
-    return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
+  double jtj[MOST * MOST], g[MOST], h[MOST * MOST], values[MOST], vectors[MOST * MOST];
+  cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, err);
+  if (s != CF_OK) return s;
   int free_u[MOST], m = 0;
   for (int u = 0; u < n; ++u)
     if (!p->at_bound[u]) free_u[m++] = u;

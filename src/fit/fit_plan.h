@@ -45,6 +45,12 @@ void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem);
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err);
 
+/* The normal equations at the current values, over every unknown: JᵀJ
+ * (n², row-major) and, unless jtu is NULL, Jᵀu (n), one pass over the
+ * observations on `threads` threads. */
+cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu,
+                               cf_error *err);
+
 /* How much a solve from the current values could still lower the cost:
  * the Gauss-Newton decrement ½ gᵀ H⁻¹ g over the unknowns not pinned at a
  * bound (in the cost's units, σ²: 1e-3 is a move of 0.045 standard

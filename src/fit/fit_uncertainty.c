@@ -19,18 +19,6 @@ double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance
   return sd;
 }
 
-/* JᵀJ over every unknown (n², row-major) at the current values: the
- * covariance's and the rank analysis's one pass over the observations. */
-cf_status fit_normal_matrix(fit_problem *p, int threads, double *jtj, cf_error *err) {
-  double x[FIT_MAX_FREE], cost;
-  fit_problem_get_x(p, x);
-  cf_lsq_problem problem;
-  fit_lsq_problem(p, x, &problem);
-  if (!cf_lsq_normal_equations(&problem, threads, jtj, NULL, &cost))
-    return cf_error_set(err, CF_ENUMERIC, "the Jacobian could not be evaluated at the solution");
-  return CF_OK;
-}
-
 /* The model slots' block of JᵀJ, each column scaled to its range's width
  * (∂/∂ρ = ∂/∂log ρ / ρ). */
 static int scaled_model_block(const fit_problem *p, const double *jtj, int *slots, double *h) {
@@ -87,7 +75,7 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
   if (s == CF_OK) { /* B: each row weighed by w instead of √w */
     memcpy(roots, p->sample_root, p->count * sizeof *roots);
     for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = roots[i] * roots[i];
-    s = fit_normal_matrix(p, threads, b, err);
+    s = fit_normal_equations(p, threads, b, NULL, err);
     memcpy(p->sample_root, roots, p->count * sizeof *roots);
   }
   if (s == CF_OK) { /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */

@@ -1,7 +1,7 @@
-/* The uncertainty of a fit: the normal matrix JᵀJ at the solution, the
- * covariance of the unknowns not at a bound (ceres::Covariance, lsq.h),
- * and the model slots the capture does not constrain. Private to
- * src/fit. */
+/* The uncertainty of a fit: from the normal matrix JᵀJ at the solution
+ * (fit_normal_equations), the covariance of the unknowns not at a bound
+ * (ceres::Covariance, lsq.h) and the model slots the capture does not
+ * constrain. Private to src/fit. */
 #ifndef CLAYFIT_FIT_UNCERTAINTY_H
 #define CLAYFIT_FIT_UNCERTAINTY_H
 
@@ -12,9 +12,6 @@
  * dρ = ρ d log ρ; dσ = dσ² / (2σ), and near σ = 0, where σ = √σ² is not
  * differentiable, the half-width √sd(σ²). */
 double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance);
-
-/* JᵀJ over every unknown (n², row-major) at the current values. */
-cf_status fit_normal_matrix(fit_problem *p, int threads, double *jtj, cf_error *err);
 
 /* The covariance of the unknowns not at a bound (those at one: rows and
  * columns 0); *rank_deficient when JᵀJ is singular there. */
