@@ -82,16 +82,17 @@ double positive_attribute(const OIIO::ImageSpec &spec, const char *name) {
   return std::isfinite(value) && value > 0.0 ? value : NAN;
 }
 
+bool is_float(const OIIO::TypeDesc &type) {
+  return type.basetype == OIIO::TypeDesc::HALF || type.basetype == OIIO::TypeDesc::FLOAT ||
+         type.basetype == OIIO::TypeDesc::DOUBLE;
+}
+
 void info_fill(cf_image_info *info, const OIIO::ImageInput &input, const OIIO::ImageSpec &spec) {
   if (!info) return;
   std::snprintf(info->format, sizeof info->format, "%s", input.format_name());
-  OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
-  info->is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
-                   base == OIIO::TypeDesc::DOUBLE;
+  info->is_float = is_float(spec.format);
   for (const OIIO::TypeDesc &channel : spec.channelformats) /* per-channel formats */
-    info->is_float |= channel.basetype == OIIO::TypeDesc::HALF ||
-                      channel.basetype == OIIO::TypeDesc::FLOAT ||
-                      channel.basetype == OIIO::TypeDesc::DOUBLE;
+    info->is_float |= is_float(channel);
   info->bits_per_sample = int(spec.format.basesize() * 8);
   info->exposure_time = positive_attribute(spec, "ExposureTime");
   info->f_number = positive_attribute(spec, "FNumber");

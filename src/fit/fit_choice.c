@@ -126,6 +126,8 @@ static void score_candidate(void *user, int m) {
   score_work *w = user;
   cf_fit_candidate *c = &w->choice->candidate[m];
   cf_error *err = &w->err[m];
+  w->status[m] = CF_OK;
+  if (!c->ok) return; /* not a candidate: nothing to score */
   double train_cost, test_cost;
   cf_fit_result on_train, on_test;
   cf_status s = fit_score_at(w->capture, w->train, &c->fit, w->choice->sigma, &w->options,
@@ -147,12 +149,6 @@ static void score_candidate(void *user, int m) {
   c->heldout_rmse = on_test.residuals ? on_test.rmse : NAN;
   c->heldout_relative_rmse = on_test.relative_rmse;
   cf_fit_result_free(&on_test);
-}
-
-static void score_if_fitted(void *user, int m) {
-  score_work *w = user;
-  w->status[m] = CF_OK;
-  if (w->choice->candidate[m].ok) score_candidate(user, m);
 }
 
 /* BIC and the held-out scores at the common σ, the candidates side by
@@ -179,7 +175,7 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
   w->options.loss = choice->loss;
   w->options.loss_scale = choice->loss_scale;
   w->options.threads = threads >= 2 ? 1 : threads; /* each candidate on one thread */
-  fit_parallel_for(choice->count, threads, score_if_fitted, w);
+  fit_parallel_for(choice->count, threads, score_candidate, w);
   cf_status s = CF_OK;
   for (int m = 0; m < choice->count && s == CF_OK; ++m)
     if (w->status[m] != CF_OK) {
