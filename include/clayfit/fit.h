@@ -83,12 +83,12 @@ typedef struct cf_fit_options {
                              observations of images k with use_image[k]
                              (for example to predict held-out lights) */
   /* the pixel footprint (MODEL.md, "Image formation"): 0 (the default)
-   * integrates an observation over its pixel with S × S samples where a
-   * lobe is narrower than the pixel (cf_footprint_samples at the fit's
-   * parameters, to a relative error of footprint_tolerance, S at most
-   * CF_FIT_FOOTPRINT_MAX_SAMPLES); 1 evaluates pixel centres only; S >= 2
-   * samples every observation S × S (as `clayfit synth --supersample S`
-   * renders) */
+   * integrates an observation over its pixel with S × S samples (Gauss-
+   * Legendre pairs, cf_footprint_offset) where a lobe is narrower than the
+   * pixel (cf_footprint_samples at the fit's parameters, to a relative
+   * error of footprint_tolerance, S at most CF_FIT_FOOTPRINT_MAX_SAMPLES);
+   * 1 evaluates pixel centres only; S >= 2 samples every observation on
+   * an S × S centred grid (as `clayfit synth --supersample S` renders) */
   int footprint;
   double footprint_tolerance; /* default 2e-3 */
   /* a pixel budget: the fit on every observation uses at most `budget` of

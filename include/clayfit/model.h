@@ -279,21 +279,39 @@ cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size
  * and M1, which have none. */
 double cf_model_lobe_width(cf_model_id model, const double *params);
 
-/* Samples per side S (S × S on a centred grid) that integrate a lobe of
- * angular width `width` over a pixel across which the normal turns by
- * `delta` radians, whose centre's half vector is `theta_h` radians from
- * the normal, to a relative error of about `tolerance`, between 1 and
- * max_samples.
+/* Samples per side n (n × n) that integrate a lobe of angular width
+ * `width` over a pixel across which the normal turns by `delta` radians,
+ * whose centre's half vector is `theta_h` radians from the normal, to a
+ * relative error of about `tolerance`: 1 (the pixel centre) where that is
+ * enough, else an even n = 2P, P panels per side with two Gauss-Legendre
+ * points each (cf_footprint_offset), at most max_samples (rounded down to
+ * even).
  *
- * The midpoint rule with spacing δ/S errs by (δ/S)²/24 (D_xx + D_yy) per
- * pixel (the composite midpoint rule's leading term). GGX near its peak is
- * D ∝ (α² + θ²)^-2 in the tilt θ, whose |D''/D| = |20θ² − 4α²|/(α² + θ²)²
- * is at most 20/(α² + θ²); so the relative error is at most
- * (δ/S)² · 5/(3 (α² + θ²)) with θ the smallest tilt inside the pixel
- * (θ_h − δ/√2, at least 0), and S = ⌈δ √(5 / (3 tol (α² + θ²)))⌉.
- * 1 for a non-positive delta or tolerance, or an infinite width. */
+ * GGX near its peak is D ∝ (α² + θ²)^-2 in the tilt θ. The centre (the
+ * midpoint rule on one panel of width δ) errs by δ²/24 (D_xx + D_yy), and
+ * |D_xx/D| = |20θ² − 4α²|/(α² + θ²)² is at most 20/(α² + θ²): a relative
+ * error of at most δ² · 5/(3 (α² + θ²)). Two Gauss-Legendre points on a
+ * panel of width h err by h⁴/4320 D_xxxx (the rule's remainder), and
+ * |D_xxxx/D| = 24 |80 t² − 48 t + 3| / (α² + θ²)² with t = θ²/(α² + θ²)
+ * in [0, 1) is at most 840/(α² + θ²)²: over both axes a relative error of
+ * at most (δ/P)⁴ · 7/(18 (α² + θ²)²). θ is the smallest tilt inside the
+ * pixel (θ_h − δ/√2, at least 0). Where the lobe is as wide as the turn
+ * (δ = α at its peak) and the tolerance is 2e-3, the centre's rule would
+ * need 29 samples per side, the pairs 8. 1 for a non-positive delta or
+ * tolerance, or an infinite width. */
 int cf_footprint_samples(double width, double delta, double theta_h, double tolerance,
                          int max_samples);
+
+/* The relative error bound above for n samples per side: the centre's for
+ * n = 1, the Gauss-Legendre pairs' for an even n; NAN for another n. 0 for
+ * a non-positive delta or an infinite width; INFINITY for α = θ = 0. */
+double cf_footprint_error(double width, double delta, double theta_h, int samples);
+
+/* Where sample j of n (n = 1 or even, 0 <= j < n) sits across the pixel,
+ * in pixels from its centre (in [−½, ½]): 0 for n = 1; for n = 2P, in
+ * panel ⌊j/2⌋ of width 1/P, at the panel's centre ∓ 1/(2√3 P). The
+ * samples weigh the same. NAN for another n or j. */
+double cf_footprint_offset(int samples, int j);
 
 #ifdef __cplusplus
 }

@@ -176,6 +176,9 @@ static cf_status check_options(const cf_fit_options *o, cf_error *err) {
       return cf_error_set(err, CF_ERANGE, "the start's %s = %g is outside its range [%g, %g]", name,
                           o->start[k], info->lower, info->upper);
   }
+  if (!(o->footprint_tolerance > 0.0 && o->footprint_tolerance < 1.0))
+    return cf_error_set(err, CF_ERANGE, "the footprint tolerance %g is not in (0, 1)",
+                        o->footprint_tolerance);
   if (o->use_start && !(o->start_scale > 0.0 && isfinite(o->start_scale)))
     return cf_error_set(err, CF_ERANGE, "the start's scale %g is not a positive number",
                         o->start_scale);

@@ -77,7 +77,8 @@ static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const
     return s;
   }
   const double *bound = p->turn_bound;
-  /* S > 1 needs width² + θ² < 5 δ² / (3 tol) (cf_footprint_samples) */
+  /* more than the centre needs width² + θ² < 5 δ² / (3 tol)
+   * (cf_footprint_samples) */
   double reach = sqrt(5.0 / (3.0 * o->footprint_tolerance)) + 0.5 * sqrt(2.0);
   for (size_t i = 0; i < p->count; ++i) {
     size_t k = observation(p, i);
@@ -96,8 +97,15 @@ static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const
   return CF_OK;
 }
 
+/* Where sample j of n sits across the pixel: the Gauss-Legendre pairs of
+ * cf_footprint_samples (auto), or the midpoints of an n × n grid (a fixed
+ * S, as `clayfit synth --supersample S` renders). */
+static double sample_offset(int gauss, int n, int j) {
+  return gauss ? cf_footprint_offset(n, j) : (j + 0.5) / n - 0.5;
+}
+
 /* Rebuild the pairs with samples[i]² points per observation. */
-static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples,
+static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples, int gauss,
                                cf_error *err) {
   const size_t lights = (size_t)p->lights;
   size_t *begin = malloc((p->count + 1) * sizeof *begin);
@@ -125,7 +133,7 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
                    o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
       continue;
     }
-    /* S × S points on the centred grid; a point that misses the sphere (it
+    /* S × S points, equally weighted; a point that misses the sphere (it
      * cannot, clear of the silhouette's margin) gets no weight and the
      * others share it */
     int hits = 0;
@@ -133,7 +141,7 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
     for (int a = 0; a < n; ++a)
       for (int b = 0; b < n; ++b) {
         size_t pair = at + ((size_t)a * (size_t)n + (size_t)b) * lights;
-        double du = (b + 0.5) / n - 0.5, dv = (a + 0.5) / n - 0.5;
+        double du = sample_offset(gauss, n, b), dv = sample_offset(gauss, n, a);
         if (cf_capture_footprint_at(capture, k, du, dv, normal, view, scratch,
                                     scratch + 3 * lights)) {
           fit_pairs_at(p->lights, normal, view, scratch, scratch + 3 * lights, 1.0, geometry + pair,
@@ -178,7 +186,7 @@ cf_status fit_footprint_update(fit_problem *p, const cf_capture *capture,
     free(samples);
     return s;
   }
-  s = rebuild_pairs(p, capture, samples, err); /* takes samples */
+  s = rebuild_pairs(p, capture, samples, options->footprint == 0, err); /* takes samples */
   if (s != CF_OK) {
     free(samples);
     return s;

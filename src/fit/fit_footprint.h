@@ -2,9 +2,11 @@
  * measures the mean of the reflected radiance over its footprint, which
  * the value at the pixel centre misses where a lobe is narrower than the
  * pixel (a sharp highlight on a sphere a few hundred pixels across). Such
- * observations get S × S samples on a centred grid over the pixel (the box
- * filter `clayfit synth` renders with), each a point of the footprint with
- * its own normal, view and lights (cf_capture_footprint_at), weighted 1/S².
+ * observations get S × S samples over the pixel, each a point of the
+ * footprint with its own normal, view and lights (cf_capture_footprint_at),
+ * weighted 1/S²: the Gauss-Legendre pairs of cf_footprint_samples (auto),
+ * or a fixed S's centred grid (the box filter `clayfit synth` renders
+ * with).
  * Private to src/fit. */
 #ifndef CLAYFIT_FIT_FOOTPRINT_H
 #define CLAYFIT_FIT_FOOTPRINT_H
