@@ -32,13 +32,6 @@ enum { SUBSAMPLE_TARGET = 4000, START_ITERATIONS = 300 };
  * cases: a noise-free F0 went to its bound.) */
 #define START_MIN_RELATIVE_DECREASE 0.05
 
-/* ... and pins a parameter for closing in on a bound (lsq.h) only at 10 %
- * closer a poor step, not the fit's 2 %: a start pinned at a bound ends
- * there, a worse start for the fit (measured on DiLiGenT with 10⁵ uniform:
- * a start pinned at the film's roughness floor, 0.03, cost the fit 124
- * iterations where one ending at 0.034 cost 14). */
-#define START_CLOSING_RATE 0.9
-
 /* ρ per channel of a Lambertian fit to the least specular half of the
  * observations (those whose half vector is farthest from the normal). */
 static void lambert_albedo(const fit_problem *p, double rho[3]) {
@@ -184,7 +177,6 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
   cf_status s = fit_declare(sub, plan, err);
   sub->function_tolerance = START_TOLERANCE;
   sub->min_relative_decrease = START_MIN_RELATIVE_DECREASE;
-  sub->closing_rate = START_CLOSING_RATE;
   int width = o->threads >= 2 ? (o->threads < count ? o->threads : count) : 1;
   if (width < 1) width = 1;
   size_t n = (size_t)sub->num_unknowns;

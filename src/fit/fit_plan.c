@@ -61,8 +61,8 @@ int fit_threads(const cf_fit_options *o) {
 
 void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
   *problem = (cf_lsq_problem){
-      p->num_unknowns,           x, p->lower,    p->upper,      p->num_blocks, fit_problem_evaluate,
-      fit_problem_block_columns, p, p->at_bound, p->exponential};
+      p->num_unknowns,           x, p->lower,   p->upper, p->num_blocks, fit_problem_evaluate,
+      fit_problem_block_columns, p, p->at_bound};
 }
 
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
@@ -78,7 +78,6 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   if (p->radius > 0.0) options.initial_radius = p->radius;
   if (p->function_tolerance > 0.0) options.function_tolerance = p->function_tolerance;
   if (p->min_relative_decrease > 0.0) options.min_relative_decrease = p->min_relative_decrease;
-  if (p->closing_rate > 0.0) options.closing_rate = p->closing_rate;
   options.stop = p->stop;
   options.stop_user = p->stop_user;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);

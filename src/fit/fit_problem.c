@@ -218,7 +218,6 @@ static void add_unknown(fit_problem *p, fit_unknown_kind kind, int slot, double 
   p->unknowns[i] = (fit_unknown){kind, slot};
   p->lower[i] = lo;
   p->upper[i] = hi;
-  p->exponential[i] = kind == FIT_LOG_SLOT;
 }
 
 void fit_problem_free_slot(fit_problem *p, int slot) {

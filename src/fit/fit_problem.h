@@ -92,7 +92,6 @@ typedef struct fit_problem {
   int num_unknowns;
   fit_unknown unknowns[FIT_MAX_FREE];
   double lower[FIT_MAX_FREE], upper[FIT_MAX_FREE];
-  int exponential[FIT_MAX_FREE];  /* 1 for an unknown that is a log (FIT_LOG_SLOT) */
   int solves, iterations;         /* tallies of fit_solve on this problem */
   double trace[CF_FIT_MAX_TRACE]; /* the costs of its solves' iterations, in order */
   int trace_count;
@@ -103,7 +102,6 @@ typedef struct fit_problem {
   /* the solves' relative function tolerance and least relative decrease
    * of a step (0: lsq.h's defaults) */
   double function_tolerance, min_relative_decrease;
-  double closing_rate; /* lsq.h's (0: its default) */
   /* threads for a prediction over every observation (fit_problem_predict;
    * 1 from fit_problem_init: a problem solved beside others keeps to one) */
   int threads;

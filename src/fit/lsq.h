@@ -48,11 +48,6 @@ typedef struct cf_lsq_problem {
    * (a constrained minimum: the data prefer a value at or beyond it), 0
    * otherwise */
   int *at_bound;
-  /* optional (num_params): nonzero for a parameter that is the log of a
-   * quantity (an albedo): how near a bound it is, for a solve closing in
-   * on one, is judged in that quantity, exp(x), not in x (log ρ in
-   * [−13.8, 0] is within 1 % of its range at ρ = 0.87, ρ at 0.99) */
-  const int *exponential;
 } cf_lsq_problem;
 
 typedef struct cf_lsq_options {
@@ -63,11 +58,6 @@ typedef struct cf_lsq_options {
    * the decrease its quadratic model predicts (Ceres'
    * min_relative_decrease, 1e-3); below, the trust region shrinks faster */
   double min_relative_decrease;
-  /* a free parameter closing in on a bound is pinned there when each of
-   * three poor steps in a row leaves at most this fraction of its distance
-   * (0.98); a multi-start's start, which only has to find its basin, can
-   * let it crawl (0.9) instead of ending at the bound */
-  double closing_rate;
   /* a line search that lowers the cost by less than this is not worth
    * another solve (the fit's costs are in units of σ²: 1e-3 is a change
    * of χ² by 0.002) */

@@ -289,7 +289,6 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->parameter_tolerance = 1e-10;
   options->line_search_tolerance = 1e-3;
   options->min_relative_decrease = 1e-3;
-  options->closing_rate = 0.98;
   options->initial_radius = 1e4;
   options->stop = nullptr;
   options->stop_user = nullptr;
@@ -349,26 +348,19 @@ class BoundWatcher final : public ceres::IterationCallback {
     return stop ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
   }
 
-  // Is parameter i closing in on a bound the steps cannot reach: 2 %
+  // Is parameter i closing in on a bound the steps cannot reach: 10 %
   // closer on each of three successful steps in a row, each with less than
-  // half the decrease its model predicted, and now within 1 % of the range
-  // (of exp(x) for an exponential parameter)? (A parameter that converges
-  // to a point near a bound slows down; one whose minimum is at the bound,
-  // with steps the bound clips and the line search shortens, keeps closing
-  // in at a constant rate with poor steps. The rate can be slow:
-  // DiLiGenT's green optical depth crept from 0.0024 to 0 by 3-5 % a step
-  // for 24 steps that kept 1 % of their promise. Judged in log ρ, a red
-  // albedo rising through 0.89 was "within 1 %" of ρ = 1 and was pinned
-  // there, 929 σ² above the minimum.)
+  // half the decrease its model predicted, and now within 1 % of the range?
+  // (A parameter that converges to a point near a bound slows down; one
+  // whose minimum is at the bound, with steps the bound clips and the line
+  // search shortens, keeps closing in at a constant rate with poor steps.)
   bool closing_in(size_t i, double relative_decrease) {
-    double lower = problem_->lower[i], upper = problem_->upper[i], x = problem_->x[i];
+    const double lower = problem_->lower[i], upper = problem_->upper[i], x = problem_->x[i];
     if (!std::isfinite(lower) || !std::isfinite(upper)) return false;
-    if (problem_->exponential != nullptr && problem_->exponential[i] != 0)
-      lower = std::exp(lower), upper = std::exp(upper), x = std::exp(x);
     const int near = x - lower <= upper - x ? -1 : 1;
     const double distance = near < 0 ? x - lower : upper - x;
-    const bool closer = near == near_[i] && distance <= options_->closing_rate * distance_[i] &&
-                        relative_decrease < 0.5;
+    const bool closer =
+        near == near_[i] && distance <= 0.9 * distance_[i] && relative_decrease < 0.5;
     approach_[i] = closer ? approach_[i] + 1 : 0;
     near_[i] = near;
     distance_[i] = distance;
