@@ -12,6 +12,9 @@
 #                                the scaling;
 #   scripts/bench_peers.sh       Ceres AutoDiff, NumericDiff and SciPy on the
 #                                same observations (bench/PEERS.md);
+#   scripts/bench_cli.py         `clayfit fit --model M4` on DiLiGenT as a user
+#                                runs it (auto footprints; the default budget
+#                                and every observation);
 #   clayfit --version            the process start (the best of five);
 # and writes bench/RESULTS.md and bench/speed_error.svg (the curve). Numbers
 # are reported, never asserted; the machine is shared, so runs vary (up to
@@ -33,6 +36,12 @@ if [ -d ../shared/data/diligent_ball ]; then
 fi
 "$clayfit" bench fit --work "$out" --json "$out/fit.json" "${extra[@]}" | tee "$out/fit.txt"
 bash scripts/bench_peers.sh build/release
+# `clayfit fit` as a user runs it: auto footprints, on the real capture
+cli_captures=()
+if [ -d ../shared/data/diligent_ball ]; then
+  cli_captures=(tests/diligent_ball.capture.json)
+fi
+python3 scripts/bench_cli.py "$clayfit" "$out" "${cli_captures[@]}" > "$out/cli.json"
 # the process start: the best of five `clayfit --version`
 start=$(python3 - "$clayfit" <<'PY'
 import subprocess, sys, time
@@ -45,5 +54,5 @@ print(f"{best:.4f}")
 PY
 )
 python3 scripts/bench_report.py "$out/eval.json" "$out/fit.json" bench/PEERS.md \
-  bench/RESULTS.md bench/speed_error.svg "$start"
+  bench/RESULTS.md bench/speed_error.svg "$start" "$out/cli.json"
 echo "bench: bench/RESULTS.md, bench/speed_error.svg"

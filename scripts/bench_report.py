@@ -73,6 +73,10 @@ def plot(runs, path):
 def main():
     eval_path, fit_path, peers_path, results_path, plot_path = sys.argv[1:6]
     start_seconds = float(sys.argv[6]) if len(sys.argv) > 6 else None
+    cli_runs = []
+    if len(sys.argv) > 7 and os.path.exists(sys.argv[7]):
+        with open(sys.argv[7]) as f:
+            cli_runs = json.load(f)["runs"]
     with open(fit_path) as f:
         fit = json.load(f)
     with open(eval_path) as f:
@@ -129,6 +133,19 @@ def main():
               f"Over the synthetic captures with every observation: time ~ n^{fmt(sc['time_exponent'], '.2f')}, "
               f"peak memory ~ n^{fmt(sc['memory_exponent'], '.2f')}, "
               f"{fmt(sc['bytes_per_observation'], '.0f')} bytes of peak memory per observation.", "",
+              *(["## `clayfit fit` as a user runs it", "",
+                 "The runs above evaluate pixel centres (`o.footprint = 1`), to compare budgets "
+                 "alone. `clayfit fit` integrates a pixel where a lobe is narrower than it "
+                 "(`--footprint auto`, Gauss-Legendre pairs); on DiLiGenT's highlight that is "
+                 "most of the solve. `scripts/bench_cli.py`, each a process of its own:", "",
+                 "| capture | arguments | wall (s) | load (s) | start (s) | refine (s) | solve (s) | iterations | integrated observations | samples | largest S | relative RMSE |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|",
+                 *[f"| {c['capture']} | `{c['arguments']}` | {c['wall_seconds']:.2f} | "
+                   f"{c['timing']['load_s']:.2f} | {c['timing']['stages']['start']:.2f} | "
+                   f"{c['timing']['stages']['refine']:.2f} | {c['timing']['stages']['solve']:.2f} | "
+                   f"{c['iterations']} | {c['footprint_observations']} | {c['footprint_samples']} | "
+                   f"{c['footprint_max']} | {100*c['relative_rmse']:.4f} % |" for c in cli_runs],
+                 ""] if cli_runs else []),
               *([f"## Process start", "",
                  f"Starting a `clayfit` process (`clayfit --version`, the best of 5) takes "
                  f"{start_seconds:.2f} s, almost all of it the dynamic loader binding "
