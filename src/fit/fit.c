@@ -142,6 +142,7 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
     if (!fit_capture_has_noise(capture)) fit_problem_set_sigma(&sub, capture, sigma);
     sub.loss = o->loss;
     sub.loss_scale = o->loss_scale;
+    sub.newton_start = 1; /* from the best start's minimum */
     cf_lsq_summary summary;
     s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, err);
     if (s == CF_OK && !*switched && scale_from_albedo(&sub, o, plan, r)) {
@@ -288,6 +289,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
   p.radius = radius;
+  p.newton_start = 1; /* from the refinement's (or the best start's) minimum */
   /* an unknown tone curve: the response exponent is fitted from here on
    * (the starts and the subsample assume a linear response) */
   cf_capture_summary about;

@@ -78,6 +78,7 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   if (p->radius > 0.0) options.initial_radius = p->radius;
   if (p->function_tolerance > 0.0) options.function_tolerance = p->function_tolerance;
   if (p->min_relative_decrease > 0.0) options.min_relative_decrease = p->min_relative_decrease;
+  options.newton_start = p->newton_start;
   options.stop = p->stop;
   options.stop_user = p->stop_user;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);

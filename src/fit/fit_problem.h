@@ -102,6 +102,7 @@ typedef struct fit_problem {
   /* the solves' relative function tolerance and least relative decrease
    * of a step (0: lsq.h's defaults) */
   double function_tolerance, min_relative_decrease;
+  int newton_start; /* lsq.h's: the solves start near a minimum */
   /* threads for a prediction over every observation (fit_problem_predict;
    * 1 from fit_problem_init: a problem solved beside others keeps to one) */
   int threads;

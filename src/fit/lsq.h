@@ -66,6 +66,13 @@ typedef struct cf_lsq_options {
    * default): a solve near where another ended starts from its final
    * radius, not damping the ill-conditioned directions all over again */
   double initial_radius;
+  /* nonzero for a solve that may start near a minimum (a refinement of
+   * an earlier solve's end): when the Gauss-Newton step from the start
+   * predicts a decrease below 10 (in the cost's units), a parameter it
+   * takes beyond a bound by more than its distance inside starts pinned
+   * there, and the Newton test at the end of the solve frees it when its
+   * minimum is inside (default 0: no such pins) */
+  int newton_start;
   /* optional: called after every successful iteration with x and the
    * cost; nonzero ends the solve there (a multi-start's start that has
    * reached another's minimum) */

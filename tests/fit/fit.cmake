@@ -122,3 +122,5 @@ clayfit_c_test(test_fit_hard_cases SOURCES fit/test_fit_hard_cases.c LIBS clayfi
 # The real DiLiGenT ball (skipped without ../shared/data): about a minute.
 clayfit_c_test(test_fit_diligent SOURCES fit/test_fit_diligent.c LIBS clayfit_fit clayfit_core
                LABELS "fit;slow" ARGS ${CMAKE_CURRENT_SOURCE_DIR} ${CLAYFIT_SHARED_DATA})
+clayfit_c_test(test_lsq_newton_start SOURCES fit/test_lsq_newton_start.c LIBS clayfit_fit LABELS fit)
+target_include_directories(test_lsq_newton_start PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
