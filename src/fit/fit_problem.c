@@ -634,7 +634,7 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       double inv_sigma = p->inv_sigma[3 * row + (size_t)c];
       double r = (prediction - y[c]) * inv_sigma;
       /* a clipped channel only counts while the model predicts less */
-      int censored = fit_problem_censored(p, 3 * row + (size_t)c, prediction, y[c]);
+      int censored = fit_problem_censored_at(p, row, c, prediction, y[c]);
       if (censored) r = 0.0;
       double rho1, root = p->sample_root ? p->sample_root[row] : 1.0;
       double rho = robust(p, r * r, &rho1);
@@ -642,7 +642,10 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
       if (!isfinite(rho)) ok = 0;
       if (!jtj || censored) continue; /* a censored residual's row is 0 */
       /* the row of J: u = √w √ρ' r and its derivatives */
-      double scale = root * sqrt(rho1) * inv_sigma, u = scale * (prediction - y[c]);
+      /* (ρ' = 1 without a loss and inside Huber's core: no square root,
+       * a tenth of an M2 pass) */
+      double scale = root * (rho1 == 1.0 ? 1.0 : sqrt(rho1)) * inv_sigma;
+      double u = scale * (prediction - y[c]);
       double model_scale = scale * chain * gain * weight_one, v[LOCAL_MAX];
       int m = 0;
       for (int q = 0; q < channel_count[c]; ++q)

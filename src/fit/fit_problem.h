@@ -237,12 +237,18 @@ static inline size_t fit_problem_slot_range(const fit_problem *p, size_t i, size
   return p->slot_begin[i + 1] - p->slot_begin[i];
 }
 
-/* Is residual i (observation i / 3 of those used, channel i % 3) censored:
- * a clipped channel whose prediction is at or above what was seen (the
- * true value is at least that, so no residual)? */
+/* Is residual i (observation i / 3 of those used, channel i % 3; or
+ * observation `row`, channel c) censored: a clipped channel whose
+ * prediction is at or above what was seen (the true value is at least
+ * that, so no residual)? */
+static inline int fit_problem_censored_at(const fit_problem *p, size_t row, int c,
+                                          double prediction, double measured) {
+  return (p->flags[row] >> c & 1u) && prediction >= measured;
+}
+
 static inline int fit_problem_censored(const fit_problem *p, size_t i, double prediction,
                                        double measured) {
-  return (p->flags[i / 3] >> (i % 3) & 1u) && prediction >= measured;
+  return fit_problem_censored_at(p, i / 3, (int)(i % 3), prediction, measured);
 }
 
 /* The prediction (with scale and exposures) and the measurement of every
