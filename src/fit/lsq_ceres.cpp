@@ -413,6 +413,32 @@ bool gradient_at(const cf_lsq_problem *problem, int threads, std::vector<double>
   return cf_lsq_normal_equations(problem, threads, nullptr, gradient->data(), &cost) != 0;
 }
 
+// The Gauss-Newton step of the parameters not pinned (pinned[i] == 0) with
+// the pinned ones held: solves JᵀJ d = −g over the free ones (jtj n × n,
+// row-major), with a ridge of 1e-12 of the largest curvature so that a
+// direction no data see does not take the step to infinity. free_index
+// gets the free parameters, step their components, in that order.
+void reduced_newton_step(const std::vector<double> &jtj, const std::vector<double> &g,
+                         const std::vector<int> &pinned, std::vector<int> *free_index,
+                         Eigen::VectorXd *step) {
+  const int n = static_cast<int>(g.size());
+  free_index->clear();
+  for (int i = 0; i < n; ++i)
+    if (pinned[i] == 0) free_index->push_back(i);
+  const int m = static_cast<int>(free_index->size());
+  Eigen::MatrixXd h(m, m);
+  Eigen::VectorXd rhs(m);
+  double largest = 0.0;
+  for (int a = 0; a < m; ++a) {
+    rhs(a) = -g[(*free_index)[a]];
+    for (int b = 0; b < m; ++b)
+      h(a, b) = jtj[static_cast<size_t>((*free_index)[a]) * n + (*free_index)[b]];
+    largest = std::max(largest, h(a, a));
+  }
+  h.diagonal().array() += 1e-12 * std::max(largest, 1e-300);
+  *step = m > 0 ? Eigen::VectorXd(h.ldlt().solve(rhs)) : Eigen::VectorXd();
+}
+
 // Which parameters at a bound (side: −1, +1; 0 for one inside the box)
 // stay pinned there. One that hit the bound on its way, the first time in
 // a solve, by its gradient: pinned when it points out of the box, freed
@@ -437,25 +463,12 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
   pinned->assign(n, 0);
   for (int i = 0; i < n; ++i)  // the gradient's decisions (descent is −g)
     if (side[i] != 0 && !by_newton[i] && side[i] * -g[i] > 0.0) (*pinned)[i] = side[i];
+  std::vector<int> free_index;
+  Eigen::VectorXd step;
   for (;;) {
-    std::vector<int> free_index;
-    for (int i = 0; i < n; ++i)
-      if ((*pinned)[i] == 0) free_index.push_back(i);
+    reduced_newton_step(jtj, g, *pinned, &free_index, &step);
     const int m = static_cast<int>(free_index.size());
     if (m == 0) return true;
-    Eigen::MatrixXd h(m, m);
-    Eigen::VectorXd rhs(m);
-    double largest = 0.0;
-    for (int a = 0; a < m; ++a) {
-      rhs(a) = -g[free_index[a]];
-      for (int b = 0; b < m; ++b)
-        h(a, b) = jtj[static_cast<size_t>(free_index[a]) * n + free_index[b]];
-      largest = std::max(largest, h(a, a));
-    }
-    // a ridge of 1e-12 of the largest curvature: a direction no data see
-    // does not take the step to infinity
-    h.diagonal().array() += 1e-12 * std::max(largest, 1e-300);
-    const Eigen::VectorXd step = h.ldlt().solve(rhs);
     bool changed = false;
     for (int a = 0; a < m; ++a) {
       const int i = free_index[a];
@@ -486,28 +499,18 @@ bool newton_pins(cf_lsq_problem *problem, int threads, std::vector<BlockCache> *
   std::vector<double> jtj(static_cast<size_t>(n) * n), g(n);
   double cost;
   if (!normal_equations(problem, threads, caches, jtj.data(), g.data(), &cost)) return false;
+  std::vector<int> free_index;
+  Eigen::VectorXd step;
   for (bool first = true;;) {
-    std::vector<int> free_index;
-    for (int i = 0; i < n; ++i)
-      if ((*active)[i] == 0) free_index.push_back(i);
+    reduced_newton_step(jtj, g, *active, &free_index, &step);
     const int m = static_cast<int>(free_index.size());
     if (m == 0) break;
-    Eigen::MatrixXd h(m, m);
-    Eigen::VectorXd rhs(m);
-    double largest = 0.0;
-    for (int a = 0; a < m; ++a) {
-      rhs(a) = -g[free_index[a]];
-      for (int b = 0; b < m; ++b)
-        h(a, b) = jtj[static_cast<size_t>(free_index[a]) * n + free_index[b]];
-      largest = std::max(largest, h(a, a));
-    }
-    h.diagonal().array() += 1e-12 * std::max(largest, 1e-300);  // as pinned_at_bounds
-    const Eigen::VectorXd step = h.ldlt().solve(rhs);
     // far from the minimum the quadratic model is no guide (DiLiGenT's
     // refinement started 10⁴ σ² above it, and the step sent every albedo
     // to 20 and the film's roughness below its floor): pins only within
     // NEWTON_START_DECREMENT of the unconstrained step's minimum
-    const double decrement = 0.5 * rhs.dot(step);
+    double decrement = 0.0;
+    for (int a = 0; a < m; ++a) decrement -= 0.5 * g[free_index[a]] * step(a);
     if (first && !(decrement < NEWTON_START_DECREMENT)) return true;
     first = false;
     bool changed = false;
