@@ -161,7 +161,7 @@ static void run_job(void *user, int i) {
   job->status = fit_solve(&job->problem, &job->options, START_ITERATIONS, &job->summary, &job->err);
   job->h[0] = NAN;
   if (job->status == CF_OK && !job->summary.stopped &&
-      fit_normal_equations(&job->problem, 1, job->h, NULL, &job->err) != CF_OK)
+      fit_normal_equations(&job->problem, 1, job->h, NULL, NULL, &job->err) != CF_OK)
     job->h[0] = NAN; /* no test within the noise of this minimum */
 }
 

@@ -94,26 +94,42 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   return s;
 }
 
-cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu,
+cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu, double *cost,
                                cf_error *err) {
-  double x[FIT_MAX_FREE], cost;
+  double x[FIT_MAX_FREE], total;
   fit_problem_get_x(p, x);
   cf_lsq_problem problem;
   fit_lsq_problem(p, x, &problem);
-  if (!cf_lsq_normal_equations(&problem, threads, jtj, jtu, &cost))
+  if (!cf_lsq_normal_equations(&problem, threads, jtj, jtu, &total))
     return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
+  if (cost) *cost = total;
   return CF_OK;
 }
 
+enum { DECREMENT_MOST = 64 }; /* unknowns: beyond, the decrement is not worth computing */
+
 cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
                                cf_error *err) {
-  enum { MOST = 64 };
   int n = p->num_unknowns;
   *decrement = HUGE_VAL;
-  if (n > MOST) return CF_OK;
-  double jtj[MOST * MOST], g[MOST], h[MOST * MOST], values[MOST], vectors[MOST * MOST];
-  cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, err);
-  if (s != CF_OK) return s;
+  if (n > DECREMENT_MOST) return CF_OK;
+  double jtj[DECREMENT_MOST * DECREMENT_MOST], g[DECREMENT_MOST];
+  cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, NULL, err);
+  if (s == CF_OK) *decrement = fit_newton_decrement_from(p, jtj, g);
+  return s;
+}
+
+int fit_pins_hold(const fit_problem *p, const double *g) {
+  for (int u = 0; u < p->num_unknowns; ++u)
+    if (p->at_bound[u] != 0 && !(p->at_bound[u] * -g[u] > 0.0)) return 0;
+  return 1;
+}
+
+double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const double *g) {
+  enum { MOST = DECREMENT_MOST };
+  int n = p->num_unknowns;
+  if (n > MOST) return HUGE_VAL;
+  double h[MOST * MOST], values[MOST], vectors[MOST * MOST];
   int free_u[MOST], m = 0;
   for (int u = 0; u < n; ++u)
     if (!p->at_bound[u]) free_u[m++] = u;
@@ -128,8 +144,7 @@ cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *
     for (int a = 0; a < m; ++a) projection += vectors[a * m + i] * g[free_u[a]];
     sum += projection * projection / values[i];
   }
-  *decrement = 0.5 * sum;
-  return CF_OK;
+  return 0.5 * sum;
 }
 
 /* With a noise model, σ from the prediction (fit_problem_reweight) and

@@ -46,9 +46,9 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err);
 
 /* The normal equations at the current values, over every unknown: JᵀJ
- * (n², row-major) and, unless jtu is NULL, Jᵀu (n), one pass over the
- * observations on `threads` threads. */
-cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu,
+ * (n², row-major) and, unless jtu is NULL, Jᵀu (n), and unless cost is
+ * NULL the cost, one pass over the observations on `threads` threads. */
+cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu, double *cost,
                                cf_error *err);
 
 /* How much a solve from the current values could still lower the cost:
@@ -58,6 +58,16 @@ cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double 
  * is not worth computing (more than 64 unknowns). */
 cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
                                cf_error *err);
+
+/* The same from the normal equations at the current values (jtj, g =
+ * Jᵀu, fit_normal_equations), without a pass; HUGE_VAL beyond 64
+ * unknowns. */
+double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const double *g);
+
+/* Do the unknowns pinned at a bound (p->at_bound) stay there by the
+ * gradient g at the current values: does descent (−g) point out of the
+ * box for each? */
+int fit_pins_hold(const fit_problem *p, const double *g);
 
 /* Below this decrement a change of the problem (new weights, new pixel
  * footprints) is not solved again. */

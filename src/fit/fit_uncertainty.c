@@ -75,7 +75,7 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
   if (s == CF_OK) { /* B: each row weighed by w instead of √w */
     memcpy(roots, p->sample_root, p->count * sizeof *roots);
     for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = roots[i] * roots[i];
-    s = fit_normal_equations(p, threads, b, NULL, err);
+    s = fit_normal_equations(p, threads, b, NULL, NULL, err);
     memcpy(p->sample_root, roots, p->count * sizeof *roots);
   }
   if (s == CF_OK) { /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */
