@@ -163,11 +163,12 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
     sub.loss_scale = o->loss_scale;
     sub.newton_start = 1; /* from the best start's minimum */
     cf_lsq_summary summary;
-    s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, err);
+    s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, NULL, err);
     if (s == CF_OK && !*switched && scale_from_albedo(&sub, o, plan, r)) {
       *switched = 1;
       s = fit_declare(&sub, plan, err);
-      if (s == CF_OK) s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, err);
+      if (s == CF_OK)
+        s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, NULL, err);
     }
   }
   if (s == CF_OK) {
@@ -332,9 +333,10 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
    * them seldom change anything */
   if (s == CF_OK) s = fit_footprint_update(&p, capture, o, NULL, err);
   /* with a noise model, weights from the prediction, to their fixed point */
+  int weights_current = 0;
   if (s == CF_OK && has_noise)
-    s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, err);
-  if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
+    s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, &weights_current, err);
+  if (s == CF_OK && has_noise && !weights_current) s = fit_problem_reweight(&p, capture, err);
 
   /* the pixel footprints where a lobe is narrower than a pixel, at the
    * parameters found, until the samples settle */

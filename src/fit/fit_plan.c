@@ -152,7 +152,9 @@ double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const 
  * below 1e-7 of its range's width, or `rounds` rounds); without one, one
  * solve. */
 cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
-                               int rounds, cf_lsq_summary *summary, cf_error *err) {
+                               int rounds, cf_lsq_summary *summary, int *weights_current,
+                               cf_error *err) {
+  if (weights_current) *weights_current = 0;
   if (!fit_capture_has_noise(capture)) return fit_solve(p, o, o->max_iterations, summary, err);
   cf_status s = CF_OK;
   for (int round = 0; s == CF_OK && round < rounds; ++round) {
@@ -161,7 +163,10 @@ cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const 
     s = fit_problem_reweight(p, capture, err);
     /* after the first solve, new weights that move nothing end it */
     if (s == CF_OK && round > 0) s = fit_newton_decrement(p, o, &decrement, err);
-    if (s == CF_OK && decrement < FIT_RESOLVE_DECREMENT) break;
+    if (s == CF_OK && decrement < FIT_RESOLVE_DECREMENT) {
+      if (weights_current) *weights_current = 1; /* from these values: nothing moved since */
+      break;
+    }
     if (s == CF_OK) s = fit_solve(p, o, o->max_iterations, summary, err);
     double change = 0.0;
     for (int k = 0; k < p->dim; ++k)

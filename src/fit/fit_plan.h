@@ -75,9 +75,11 @@ int fit_pins_hold(const fit_problem *p, const double *g);
 
 /* With a noise model, σ from the prediction (fit_problem_reweight) and
  * solve again, to the fixed point or `rounds` rounds; without one, one
- * solve. */
+ * solve. *weights_current (optional) is 1 when it ended with the weights
+ * of the current values (new weights that moved nothing), else 0. */
 cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
-                               int rounds, cf_lsq_summary *summary, cf_error *err);
+                               int rounds, cf_lsq_summary *summary, int *weights_current,
+                               cf_error *err);
 
 /* The width of a model slot's range. */
 double fit_slot_width(const fit_problem *p, int slot);
