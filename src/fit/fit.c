@@ -132,8 +132,8 @@ static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *
 static cf_status settled_at_minimum(fit_problem *p, const cf_fit_options *o, double *jtj,
                                     cf_lsq_summary *summary, int *settled, cf_error *err) {
   *settled = 0;
-  if (p->solves == 0 || p->num_unknowns > 64) return CF_OK;
-  double g[64], cost;
+  if (p->solves == 0 || p->num_unknowns > FIT_DECREMENT_MOST) return CF_OK;
+  double g[FIT_DECREMENT_MOST], cost;
   cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, &cost, err);
   if (s != CF_OK) return s;
   *settled = fit_newton_decrement_from(p, jtj, g) < FIT_RESOLVE_DECREMENT && fit_pins_hold(p, g);

@@ -106,14 +106,12 @@ cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double 
   return CF_OK;
 }
 
-enum { DECREMENT_MOST = 64 }; /* unknowns: beyond, the decrement is not worth computing */
-
 cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
                                cf_error *err) {
   int n = p->num_unknowns;
   *decrement = HUGE_VAL;
-  if (n > DECREMENT_MOST) return CF_OK;
-  double jtj[DECREMENT_MOST * DECREMENT_MOST], g[DECREMENT_MOST];
+  if (n > FIT_DECREMENT_MOST) return CF_OK;
+  double jtj[FIT_DECREMENT_MOST * FIT_DECREMENT_MOST], g[FIT_DECREMENT_MOST];
   cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, NULL, err);
   if (s == CF_OK) *decrement = fit_newton_decrement_from(p, jtj, g);
   return s;
@@ -126,7 +124,7 @@ int fit_pins_hold(const fit_problem *p, const double *g) {
 }
 
 double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const double *g) {
-  enum { MOST = DECREMENT_MOST };
+  enum { MOST = FIT_DECREMENT_MOST };
   int n = p->num_unknowns;
   if (n > MOST) return HUGE_VAL;
   double h[MOST * MOST], values[MOST], vectors[MOST * MOST];

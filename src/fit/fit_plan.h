@@ -51,17 +51,21 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
 cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu, double *cost,
                                cf_error *err);
 
+/* The most unknowns for which a Newton decrement is computed (beyond, it
+ * is not worth it: HUGE_VAL). */
+enum { FIT_DECREMENT_MOST = 64 };
+
 /* How much a solve from the current values could still lower the cost:
  * the Gauss-Newton decrement ½ gᵀ H⁻¹ g over the unknowns not pinned at a
  * bound (in the cost's units, σ²: 1e-3 is a move of 0.045 standard
  * deviations along the worst direction). *decrement is HUGE_VAL where it
- * is not worth computing (more than 64 unknowns). */
+ * is not worth computing (more than FIT_DECREMENT_MOST unknowns). */
 cf_status fit_newton_decrement(fit_problem *p, const cf_fit_options *o, double *decrement,
                                cf_error *err);
 
 /* The same from the normal equations at the current values (jtj, g =
- * Jᵀu, fit_normal_equations), without a pass; HUGE_VAL beyond 64
- * unknowns. */
+ * Jᵀu, fit_normal_equations), without a pass; HUGE_VAL beyond
+ * FIT_DECREMENT_MOST unknowns. */
 double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const double *g);
 
 /* Do the unknowns pinned at a bound (p->at_bound) stay there by the
