@@ -59,14 +59,14 @@ static void decode(const read_ahead *r, size_t k, decoded *d) {
   d->status = cf_image_read(spec->image_paths[k], &d->image, &d->info, &d->err);
   if (d->status == CF_OK && d->info.is_float) /* integer samples are finite */
     d->status = cf_image_check_finite(&d->image, spec->image_paths[k], &d->err);
-  if (d->status == CF_OK && spec->mask_paths && r->one_mask && r->shared_status != CF_OK) {
+  if (d->status != CF_OK || !spec->mask_paths) return;
+  if (!r->one_mask) {
+    d->status = cf_image_read(spec->mask_paths[k], &d->mask, NULL, &d->err);
+  } else if (r->shared_status != CF_OK) {
     d->status = r->shared_status;
     d->err = r->shared_err;
-  } else if (d->status == CF_OK && spec->mask_paths && !r->one_mask) {
-    d->status = cf_image_read(spec->mask_paths[k], &d->mask, NULL, &d->err);
   }
-  if (d->status == CF_OK && spec->mask_paths)
-    d->status = check_mask(capture, k, &d->image, mask_of(r, d), &d->err);
+  if (d->status == CF_OK) d->status = check_mask(capture, k, &d->image, mask_of(r, d), &d->err);
 }
 
 static void *reader(void *arg) {

@@ -77,15 +77,14 @@ static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const
     return s;
   }
   const double *bound = p->turn_bound;
-  /* more than the centre needs width² + θ² < 5 δ² / (3 tol)
-   * (cf_footprint_samples) */
-  double reach = sqrt(5.0 / (3.0 * o->footprint_tolerance)) + 0.5 * sqrt(2.0);
   for (size_t i = 0; i < p->count; ++i) {
     size_t k = observation(p, i);
     double cos_h = cf_observation_specularity(p->obs, k);
     if (cos_h <= -1.0) continue; /* unlit */
     double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
-    if (theta_h >= reach * delta_max) continue;
+    /* the centre is enough even for a lobe of no width at the image's
+     * largest turn (the bound grows with both): no turn to measure */
+    if (cf_footprint_error(0.0, delta_max, theta_h, 1) <= o->footprint_tolerance) continue;
     if (isnan(p->pixel_turn[i]))
       p->pixel_turn[i] = pixel_turn(capture, k, delta_max, scratch, p->lights);
     double delta = p->pixel_turn[i];
