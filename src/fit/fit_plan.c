@@ -42,6 +42,7 @@ cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_p
 
 cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   fit_problem_clear_unknowns(p);
+  p->radius = 0.0; /* other unknowns, another minimum: Ceres' initial trust region */
   for (int k = 0; k < p->dim; ++k)
     if (plan->status[k] == CF_PARAM_FITTED) fit_problem_free_slot(p, k);
   if (plan->scale) fit_problem_free_scale(p);

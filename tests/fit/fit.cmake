@@ -124,3 +124,5 @@ clayfit_c_test(test_fit_diligent SOURCES fit/test_fit_diligent.c LIBS clayfit_fi
                LABELS "fit;slow" ARGS ${CMAKE_CURRENT_SOURCE_DIR} ${CLAYFIT_SHARED_DATA})
 clayfit_c_test(test_lsq_newton_start SOURCES fit/test_lsq_newton_start.c LIBS clayfit_fit LABELS fit)
 target_include_directories(test_lsq_newton_start PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
+clayfit_c_test(test_lsq_extrapolate SOURCES fit/test_lsq_extrapolate.c LIBS clayfit_fit LABELS fit)
+target_include_directories(test_lsq_extrapolate PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
