@@ -22,34 +22,71 @@
 
 namespace {
 
-// The last evaluation of one block: x, its cost and, when `normal`, its
-// normal equations over the block's k columns. One solve keeps one per
-// block across its chunks, so that a chunk's first Jacobian, the Newton
-// test of the bounds and a Jacobian after a cost at the same point are
-// not evaluated again. Ceres evaluates a block from one thread at a time.
-struct BlockCache {
+// One evaluation of a block: x, its cost and, when `normal`, its normal
+// equations over the block's k columns.
+struct BlockEvaluation {
   bool valid = false, normal = false;
+  int uses = 0;             // requests it served after its own
+  unsigned long stamp = 0;  // the cache's clock at its last use
   std::vector<double> x, jtj, jtu;
   double cost = 0.0;
+};
 
-  // The block at x, from the cache or evaluated into it (the normal
-  // equations too when `normal`).
-  bool at(const cf_lsq_problem *problem, size_t block, int k, const double *point,
-          bool want_normal) {
+// The last two evaluations of one block. One solve keeps one cache per
+// block across its chunks, so that a chunk's first Jacobian, the Newton
+// test of the bounds and a Jacobian after a cost at the same point are not
+// evaluated again. Two, because Ceres evaluates a candidate before it
+// decides on it: a solve that ends on the function tolerance ends where it
+// was before its last candidate (one pass at the end of every such solve,
+// measured, with one). A new evaluation replaces one that served nothing
+// after its own (a rejected candidate), else the one used least recently.
+// Ceres evaluates a block from one thread at a time.
+struct BlockCache {
+  BlockEvaluation slot[2];
+  unsigned long clock = 0;
+
+  // The block at `point`, from the cache or evaluated into it (the normal
+  // equations too when `want_normal`); nullptr when it cannot be
+  // evaluated.
+  const BlockEvaluation *at(const cf_lsq_problem *problem, size_t block, int k, const double *point,
+                            bool want_normal) {
     const int n = problem->num_params;
-    if (valid && (normal || !want_normal) && std::equal(point, point + n, x.begin())) return true;
-    valid = false;
+    ++clock;
+    for (BlockEvaluation &e : slot)
+      if (e.valid && (e.normal || !want_normal) && std::equal(point, point + n, e.x.begin())) {
+        ++e.uses;
+        e.stamp = clock;
+        return &e;
+      }
+    BlockEvaluation &e = replaced();
+    e.valid = false;
     if (want_normal) {
-      jtj.resize(static_cast<size_t>(k) * k);
-      jtu.resize(k);
+      e.jtj.resize(static_cast<size_t>(k) * k);
+      e.jtu.resize(k);
     }
-    if (!problem->evaluate(problem->user, point, block, &cost, want_normal ? jtj.data() : nullptr,
-                           want_normal ? jtu.data() : nullptr))
-      return false;
-    x.assign(point, point + n);
-    normal = want_normal;
-    valid = true;
-    return true;
+    if (!problem->evaluate(problem->user, point, block, &e.cost,
+                           want_normal ? e.jtj.data() : nullptr,
+                           want_normal ? e.jtu.data() : nullptr))
+      return nullptr;
+    e.x.assign(point, point + n);
+    e.normal = want_normal;
+    e.valid = true;
+    e.uses = 0;
+    e.stamp = clock;
+    return &e;
+  }
+
+  void clear() {
+    slot[0].valid = slot[1].valid = false;
+  }
+
+ private:
+  BlockEvaluation &replaced() {
+    for (BlockEvaluation &e : slot)
+      if (!e.valid) return e;
+    const bool idle0 = slot[0].uses == 0, idle1 = slot[1].uses == 0;
+    if (idle0 != idle1) return idle0 ? slot[0] : slot[1];
+    return slot[0].stamp <= slot[1].stamp ? slot[0] : slot[1];
   }
 };
 
@@ -82,14 +119,16 @@ class BlockCost final : public ceres::CostFunction {
     const int n = problem_->num_params, k = static_cast<int>(columns_.size());
     const double *x = parameters[0];
     if (jacobian == nullptr) {  // the cost alone: (0, …, 0, √(2C))
-      if (!cache_->at(problem_, block_, k, x, k <= SPECULATE_COLUMNS)) return false;
+      const BlockEvaluation *e = cache_->at(problem_, block_, k, x, k <= SPECULATE_COLUMNS);
+      if (e == nullptr) return false;
       std::fill(residuals, residuals + k, 0.0);
-      residuals[k] = std::sqrt(2.0 * cache_->cost);
+      residuals[k] = std::sqrt(2.0 * e->cost);
       return true;
     }
-    if (!cache_->at(problem_, block_, k, x, true)) return false;
-    const double cost = cache_->cost;
-    const std::vector<double> &jtj_storage = cache_->jtj, &jtu_storage = cache_->jtu;
+    const BlockEvaluation *e = cache_->at(problem_, block_, k, x, true);
+    if (e == nullptr) return false;
+    const double cost = e->cost;
+    const std::vector<double> &jtj_storage = e->jtj, &jtu_storage = e->jtu;
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     Eigen::Map<const RowMajor> jtj(jtj_storage.data(), k, k);
     Eigen::Map<const Eigen::VectorXd> jtu(jtu_storage.data(), k);
@@ -201,16 +240,17 @@ int normal_equations(const cf_lsq_problem *problem, int threads, std::vector<Blo
     for (size_t b = t; b < problem->num_blocks; b += count) {
       const int *columns = nullptr;
       const int k = problem->block_columns(problem->user, b, &columns);
-      scratch.valid = false;  // it held another block
+      scratch.clear();  // it held another block
       BlockCache &cache = caches != nullptr ? (*caches)[b] : scratch;
-      if (!cache.at(problem, b, k, problem->x, true)) return false;
-      sum_cost[t] += cache.cost;
+      const BlockEvaluation *e = cache.at(problem, b, k, problem->x, true);
+      if (e == nullptr) return false;
+      sum_cost[t] += e->cost;
       for (int a = 0; a < k; ++a) {
-        sum_jtu[t][columns[a]] += cache.jtu[a];
+        sum_jtu[t][columns[a]] += e->jtu[a];
         if (!jtj) continue;
         for (int c = 0; c < k; ++c)
           sum_jtj[t][static_cast<size_t>(columns[a]) * n + columns[c]] +=
-              cache.jtj[static_cast<size_t>(a) * k + c];
+              e->jtj[static_cast<size_t>(a) * k + c];
       }
     }
     return true;
