@@ -44,6 +44,9 @@ struct BlockEvaluation {
 struct BlockCache {
   BlockEvaluation slot[2];
   unsigned long clock = 0;
+  // new points Ceres asked the cost at since its last Jacobian (BlockCost)
+  int trials = 0;
+  bool missed = false;  // the last at() evaluated
 
   // The block at `point`, from the cache or evaluated into it (the normal
   // equations too when `want_normal`); nullptr when it cannot be
@@ -52,12 +55,14 @@ struct BlockCache {
                             bool want_normal) {
     const int n = problem->num_params;
     ++clock;
+    missed = false;
     for (BlockEvaluation &e : slot)
       if (e.valid && (e.normal || !want_normal) && std::equal(point, point + n, e.x.begin())) {
         ++e.uses;
         e.stamp = clock;
         return &e;
       }
+    missed = true;
     BlockEvaluation &e = replaced();
     e.valid = false;
     if (want_normal) {
@@ -100,7 +105,11 @@ struct BlockCache {
 // and, when it accepts the step, the Jacobian at the same point, which is
 // then free. A Jacobian pass costs about 1.5 cost passes, so an accepted
 // step costs 1.5 passes instead of 2.5, a rejected one 1.5 instead of 1.
-constexpr int SPECULATE_COLUMNS = 128;
+// Only the first SPECULATE_TRIALS new points after a Jacobian, though (a
+// candidate, and the next after a rejected one): the rest are the
+// projected line search's trials along a step that left the box, up to
+// 20, whose normal equations are seldom asked for.
+constexpr int SPECULATE_COLUMNS = 128, SPECULATE_TRIALS = 2;
 
 class BlockCost final : public ceres::CostFunction {
  public:
@@ -119,14 +128,17 @@ class BlockCost final : public ceres::CostFunction {
     const int n = problem_->num_params, k = static_cast<int>(columns_.size());
     const double *x = parameters[0];
     if (jacobian == nullptr) {  // the cost alone: (0, …, 0, √(2C))
-      const BlockEvaluation *e = cache_->at(problem_, block_, k, x, k <= SPECULATE_COLUMNS);
+      const bool speculate = k <= SPECULATE_COLUMNS && cache_->trials < SPECULATE_TRIALS;
+      const BlockEvaluation *e = cache_->at(problem_, block_, k, x, speculate);
       if (e == nullptr) return false;
+      if (cache_->missed) ++cache_->trials;
       std::fill(residuals, residuals + k, 0.0);
       residuals[k] = std::sqrt(2.0 * e->cost);
       return true;
     }
     const BlockEvaluation *e = cache_->at(problem_, block_, k, x, true);
     if (e == nullptr) return false;
+    cache_->trials = 0;
     const double cost = e->cost;
     const std::vector<double> &jtj_storage = e->jtj, &jtu_storage = e->jtu;
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
