@@ -359,16 +359,14 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   fit_hidden_base hidden = {0};
   for (int round = 0; s == CF_OK && round < MAX_UNCONSTRAINED_ROUNDS; ++round) {
     fit_progress(o, "solving", (size_t)round, MAX_UNCONSTRAINED_ROUNDS);
-    int settled = 0;
+    int settled = 0; /* (jtj then holds the normal equations at the solution) */
     if (round == 0) s = settled_at_minimum(&p, o, jtj, &summary, &settled, err);
-    if (s == CF_OK && !settled) s = fit_solve(&p, o, o->max_iterations, &summary, err);
+    if (s == CF_OK && !settled) s = fit_solve_normal(&p, o, o->max_iterations, &summary, jtj, err);
     if (s == CF_OK && !switched && scale_from_albedo(&p, o, &plan, r)) {
       switched = 1;
-      settled = 0;
       s = fit_declare(&p, &plan, err);
-      if (s == CF_OK) s = fit_solve(&p, o, o->max_iterations, &summary, err);
+      if (s == CF_OK) s = fit_solve_normal(&p, o, o->max_iterations, &summary, jtj, err);
     }
-    if (s == CF_OK && !settled) s = fit_normal_equations(&p, fit_threads(o), jtj, NULL, NULL, err);
     if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
     if (s == CF_OK && !rank_deficient)
       s = fit_sample_covariance(&p, fit_threads(o), covariance, err);

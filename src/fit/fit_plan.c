@@ -68,6 +68,11 @@ void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
 
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err) {
+  return fit_solve_normal(p, o, max_iterations, summary, NULL, err);
+}
+
+cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iterations,
+                           cf_lsq_summary *summary, double *jtj, cf_error *err) {
   double x[FIT_MAX_FREE];
   fit_problem_get_x(p, x);
   cf_lsq_problem problem;
@@ -82,6 +87,7 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   options.newton_start = p->newton_start;
   options.stop = p->stop;
   options.stop_user = p->stop_user;
+  options.final_jtj = jtj;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);
   if (s == CF_OK) p->radius = fmin(summary->final_radius, MAX_CARRIED_RADIUS);
   if (s == CF_OK) fit_problem_set_x(p, x);
@@ -92,6 +98,8 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
       p->trace[p->trace_count++] = summary->trace[i];
     p->solver_seconds += summary->seconds;
   }
+  if (s == CF_OK && jtj && !summary->final_normal) /* (could not be evaluated there) */
+    s = fit_normal_equations(p, fit_threads(o), jtj, NULL, NULL, err);
   return s;
 }
 

@@ -45,6 +45,12 @@ void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem);
 cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
                     cf_lsq_summary *summary, cf_error *err);
 
+/* fit_solve, then the normal equations at the solution over every unknown
+ * into jtj (n², as fit_normal_equations), mostly from the evaluations the
+ * solve kept. */
+cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iterations,
+                           cf_lsq_summary *summary, double *jtj, cf_error *err);
+
 /* The normal equations at the current values, over every unknown: JᵀJ
  * (n², row-major) and, unless jtu is NULL, Jᵀu (n), and unless cost is
  * NULL the cost, one pass over the observations on `threads` threads. */

@@ -78,6 +78,11 @@ typedef struct cf_lsq_options {
    * reached another's minimum) */
   int (*stop)(void *user, const double *x, double cost);
   void *stop_user;
+  /* optional (num_params², row-major): the normal equations JᵀJ over
+   * every parameter at the solution, from the evaluations the solve kept
+   * (one pass less than cf_lsq_normal_equations after it; the summary's
+   * final_normal says they were written) */
+  double *final_jtj;
 } cf_lsq_options;
 
 void cf_lsq_default_options(cf_lsq_options *options);
@@ -96,6 +101,7 @@ typedef struct cf_lsq_summary {
   double seconds;
   double final_radius; /* the trust region at the end */
   int stopped;         /* options->stop ended it */
+  int final_normal;    /* options->final_jtj holds JᵀJ at the solution */
 } cf_lsq_summary;
 
 /* Solve (Levenberg-Marquardt, dense normal equations) with an active set

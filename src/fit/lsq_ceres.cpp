@@ -345,6 +345,7 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->newton_start = 0;
   options->stop = nullptr;
   options->stop_user = nullptr;
+  options->final_jtj = nullptr;
 }
 
 namespace {
@@ -847,6 +848,12 @@ extern "C" cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options 
       if (!released || iterations >= options->max_iterations) break;
     }
     if (problem->at_bound != nullptr) std::copy(active.begin(), active.end(), problem->at_bound);
+    summary->final_normal = 0;
+    if (options->final_jtj != nullptr && ceres_summary.termination_type != ceres::FAILURE) {
+      double cost;  // (the blocks' kept evaluations at x, or a pass)
+      summary->final_normal =
+          normal_equations(problem, options->threads, &caches, options->final_jtj, nullptr, &cost);
+    }
     summary->initial_cost = initial_cost;
     summary->final_cost = ceres_summary.final_cost;
     summary->iterations = iterations;
