@@ -5,6 +5,23 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fit_parallel.h"
+
+/* The observations split into this many parts per thread (the integrated
+ * ones cluster in the highlight: small parts even the threads' work). */
+enum { PARTS_PER_THREAD = 8 };
+
+/* The range [*begin, *end) of part `part` of `parts` over count items. */
+static void part_range(size_t count, int parts, int part, size_t *begin, size_t *end) {
+  *begin = count * (size_t)part / (size_t)parts;
+  *end = count * ((size_t)part + 1) / (size_t)parts;
+}
+
+static int parts_for(const fit_problem *p) {
+  int threads = p->threads > 1 ? p->threads : 1;
+  return threads > 1 && p->count >= 1024 ? threads * PARTS_PER_THREAD : 1;
+}
+
 static size_t observation(const fit_problem *p, size_t i) {
   return p->index ? p->index[i] : i;
 }
@@ -50,6 +67,41 @@ static double pixel_turn(const cf_capture *capture, size_t k, double fallback, d
   return fmax(angle_between(n[0], n[1]), angle_between(n[2], n[3]));
 }
 
+/* Observations [begin, end) of choose_samples' adaptive S. */
+typedef struct choose_job {
+  fit_problem *p;
+  const cf_capture *capture;
+  const cf_fit_options *o;
+  double width;
+  int *samples;
+  int parts;
+  double *scratch; /* 6 × lights per part */
+} choose_job;
+
+static void choose_part(void *user, int part) {
+  choose_job *job = user;
+  fit_problem *p = job->p;
+  size_t begin, end;
+  part_range(p->count, job->parts, part, &begin, &end);
+  double *scratch = job->scratch + 6 * (size_t)p->lights * (size_t)part;
+  const double *bound = p->turn_bound;
+  for (size_t i = begin; i < end; ++i) {
+    size_t k = observation(p, i);
+    double cos_h = cf_observation_specularity(p->obs, k);
+    if (cos_h <= -1.0) continue; /* unlit */
+    double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
+    /* the centre is enough even for a lobe of no width at the image's
+     * largest turn (the bound grows with both): no turn to measure */
+    if (cf_footprint_error(0.0, delta_max, theta_h, 1) <= job->o->footprint_tolerance) continue;
+    if (isnan(p->pixel_turn[i]))
+      p->pixel_turn[i] = pixel_turn(job->capture, k, delta_max, scratch, p->lights);
+    double delta = p->pixel_turn[i];
+    int want = cf_footprint_samples(job->width, delta, theta_h, job->o->footprint_tolerance,
+                                    CF_FIT_FOOTPRINT_MAX_SAMPLES);
+    if (want > job->samples[i]) job->samples[i] = want;
+  }
+}
+
 /* The S each observation wants (only growing from `current`). */
 static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
                                 const int *current, int *samples, cf_error *err) {
@@ -64,36 +116,20 @@ static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const
   }
   double width = cf_model_lobe_width(p->model, p->params);
   if (isinf(width)) return CF_OK;
-  double *scratch = malloc(6 * (size_t)p->lights * sizeof *scratch);
-  cf_status s = scratch ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK && !p->turn_bound) s = turn_bounds(capture, &p->turn_bound, err);
+  cf_status s = CF_OK;
+  if (!p->turn_bound) s = turn_bounds(capture, &p->turn_bound, err);
   if (s == CF_OK && !p->pixel_turn) { /* measured as first needed */
     p->pixel_turn = malloc((p->count ? p->count : 1) * sizeof *p->pixel_turn);
     if (!p->pixel_turn) s = cf_error_set(err, CF_ENOMEM, "out of memory");
     for (size_t i = 0; s == CF_OK && i < p->count; ++i) p->pixel_turn[i] = NAN;
   }
-  if (s != CF_OK) {
-    free(scratch);
-    return s;
-  }
-  const double *bound = p->turn_bound;
-  for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i);
-    double cos_h = cf_observation_specularity(p->obs, k);
-    if (cos_h <= -1.0) continue; /* unlit */
-    double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
-    /* the centre is enough even for a lobe of no width at the image's
-     * largest turn (the bound grows with both): no turn to measure */
-    if (cf_footprint_error(0.0, delta_max, theta_h, 1) <= o->footprint_tolerance) continue;
-    if (isnan(p->pixel_turn[i]))
-      p->pixel_turn[i] = pixel_turn(capture, k, delta_max, scratch, p->lights);
-    double delta = p->pixel_turn[i];
-    int want = cf_footprint_samples(width, delta, theta_h, o->footprint_tolerance,
-                                    CF_FIT_FOOTPRINT_MAX_SAMPLES);
-    if (want > samples[i]) samples[i] = want;
-  }
-  free(scratch);
-  return CF_OK;
+  choose_job job = {p, capture, o, width, samples, parts_for(p), NULL};
+  if (s == CF_OK &&
+      !(job.scratch = malloc(6 * (size_t)p->lights * (size_t)job.parts * sizeof *job.scratch)))
+    s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) fit_parallel_for(job.parts, p->threads, choose_part, &job);
+  free(job.scratch);
+  return s;
 }
 
 /* Where sample j of n sits across the pixel: the Gauss-Legendre pairs of
@@ -103,30 +139,33 @@ static double sample_offset(int gauss, int n, int j) {
   return gauss ? cf_footprint_offset(n, j) : (j + 0.5) / n - 0.5;
 }
 
-/* Rebuild the pairs with samples[i]² points per observation. */
-static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples, int gauss,
-                               cf_error *err) {
-  const size_t lights = (size_t)p->lights;
-  size_t *begin = malloc((p->count + 1) * sizeof *begin);
-  if (!begin) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  begin[0] = 0;
-  for (size_t i = 0; i < p->count; ++i)
-    begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
-  size_t slots = begin[p->count];
-  cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
-  double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
-  double *scratch = malloc(6 * lights * sizeof *scratch);
-  if (!geometry || !weight || !scratch) {
-    free(begin);
-    free(geometry);
-    free(weight);
-    free(scratch);
-    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
-  }
+/* Observations [begin, end) of rebuild_pairs: their pairs at begin[i]. */
+typedef struct rebuild_job {
+  const fit_problem *p;
+  const cf_capture *capture;
+  const int *samples;
+  int gauss;
+  const size_t *begin;
+  cf_geometry *geometry;
+  double *weight;
+  int parts;
+  double *scratch; /* 6 × lights per part */
+} rebuild_job;
+
+static void rebuild_part(void *user, int part) {
+  rebuild_job *job = user;
+  const fit_problem *p = job->p;
   const cf_observations *o = p->obs;
-  for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i), at = begin[i];
-    int n = samples[i];
+  const size_t lights = (size_t)p->lights;
+  const int gauss = job->gauss;
+  cf_geometry *geometry = job->geometry;
+  double *weight = job->weight;
+  size_t first, end;
+  part_range(p->count, job->parts, part, &first, &end);
+  double *scratch = job->scratch + 6 * lights * (size_t)part;
+  for (size_t i = first; i < end; ++i) {
+    size_t k = observation(p, i), at = job->begin[i];
+    int n = job->samples[i];
     if (n == 1) { /* the pixel centre */
       fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
                    o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
@@ -141,7 +180,7 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
       for (int b = 0; b < n; ++b) {
         size_t pair = at + ((size_t)a * (size_t)n + (size_t)b) * lights;
         double du = sample_offset(gauss, n, b), dv = sample_offset(gauss, n, a);
-        if (cf_capture_footprint_at(capture, k, du, dv, normal, view, scratch,
+        if (cf_capture_footprint_at(job->capture, k, du, dv, normal, view, scratch,
                                     scratch + 3 * lights)) {
           fit_pairs_at(p->lights, normal, view, scratch, scratch + 3 * lights, 1.0, geometry + pair,
                        weight + 3 * pair);
@@ -159,6 +198,31 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
     }
     for (size_t j = 0; j < 3 * count; ++j) weight[3 * at + j] /= hits;
   }
+}
+
+/* Rebuild the pairs with samples[i]² points per observation. */
+static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples, int gauss,
+                               cf_error *err) {
+  const size_t lights = (size_t)p->lights;
+  size_t *begin = malloc((p->count + 1) * sizeof *begin);
+  if (!begin) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  begin[0] = 0;
+  for (size_t i = 0; i < p->count; ++i)
+    begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
+  size_t slots = begin[p->count];
+  cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
+  double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
+  int parts = parts_for(p);
+  double *scratch = malloc(6 * lights * (size_t)parts * sizeof *scratch);
+  if (!geometry || !weight || !scratch) {
+    free(begin);
+    free(geometry);
+    free(weight);
+    free(scratch);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
+  }
+  rebuild_job job = {p, capture, samples, gauss, begin, geometry, weight, parts, scratch};
+  fit_parallel_for(parts, p->threads, rebuild_part, &job);
   free(scratch);
   free(p->geometry);
   free(p->weight);
