@@ -96,8 +96,9 @@ typedef struct fit_problem {
   double trace[CF_FIT_MAX_TRACE]; /* the costs of its solves' iterations, in order */
   int trace_count;
   double solver_seconds;
-  /* the trust region the last solve ended with (0: none yet), where the
-   * next starts (lsq.h) */
+  /* the trust region the last solve ended with, where the next starts
+   * (lsq.h); 0 (Ceres' initial one) before the first solve and after
+   * every fit_declare */
   double radius;
   /* the solves' relative function tolerance and least relative decrease
    * of a step (0: lsq.h's defaults) */
