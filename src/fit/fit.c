@@ -299,10 +299,10 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
   clock = then;
   fit_problem p;
-  s = fit_problem_init(&p, capture, o->model, population->index, population->count, err);
+  s = fit_problem_init(&p, capture, o->model, population->index, population->count, fit_threads(o),
+                       err);
   if (s != CF_OK) return s;
   if (population->weight) s = fit_problem_set_sample_weights(&p, population->weight, err);
-  p.threads = fit_threads(o);
   memcpy(p.params, params, sizeof params);
   p.log_scale = log_scale;
   /* (the trust region starts anew, not where the refinement's ended: that

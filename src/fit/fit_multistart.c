@@ -267,7 +267,7 @@ static cf_status warm_dielectric(const cf_capture *capture, const cf_fit_options
   fit_plan_for(capture, &o2, &plan);
   fit_problem sub;
   cf_status s =
-      fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index, sample->count, err);
+      fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index, sample->count, 1, err);
   if (s != CF_OK) return s;
   s = fit_problem_set_sample_weights(&sub, sample->weight, err);
   double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM],

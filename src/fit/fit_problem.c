@@ -10,6 +10,9 @@
 
 enum { BLOCK_SIZE = 1024 };
 
+/* Problems of fewer observations are built on one thread. */
+enum { INIT_PARALLEL_MIN = 65536 };
+
 static size_t observation(const fit_problem *p, size_t i) {
   return p->index ? p->index[i] : i;
 }
@@ -81,8 +84,31 @@ cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, c
   return CF_OK;
 }
 
+/* Observations [begin, end) of fit_problem_init: measurements, images,
+ * flags, and their pairs' geometry and weights. */
+typedef struct init_job {
+  fit_problem *p;
+  int parts;
+} init_job;
+
+static void init_part(void *user, int part) {
+  const init_job *job = user;
+  fit_problem *p = job->p;
+  const cf_observations *o = p->obs;
+  size_t begin = p->count * (size_t)part / (size_t)job->parts;
+  size_t end = p->count * ((size_t)part + 1) / (size_t)job->parts;
+  for (size_t i = begin; i < end; ++i) {
+    size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
+    for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = o->rgb[3 * k + (size_t)c];
+    p->image[i] = o->image[k];
+    p->flags[i] = o->flags[k];
+    fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * slot,
+                 o->irradiance + 3 * slot, 1.0, p->geometry + pair, p->weight + 3 * pair);
+  }
+}
+
 cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_id model,
-                           const uint32_t *index, size_t count, cf_error *err) {
+                           const uint32_t *index, size_t count, int threads, cf_error *err) {
   memset(p, 0, sizeof *p);
   p->obs = cf_capture_observations(capture);
   p->model = model;
@@ -96,7 +122,7 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->loss_scale = 3.0;
   p->response = 1.0;
   p->block_size = BLOCK_SIZE;
-  p->threads = 1;
+  p->threads = threads > 1 ? threads : 1;
   cf_model_default_params(model, p->params);
   size_t pairs = p->count * (size_t)p->lights;
   p->slots = pairs;
@@ -112,16 +138,10 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
     fit_problem_release(p);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", p->count);
   }
-  /* the geometry of every (observation, light) pair, and E c_i */
-  const cf_observations *o = p->obs;
-  for (size_t i = 0; i < p->count; ++i) {
-    size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
-    for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = o->rgb[3 * k + (size_t)c];
-    p->image[i] = o->image[k];
-    p->flags[i] = o->flags[k];
-    fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * slot,
-                 o->irradiance + 3 * slot, 1.0, p->geometry + pair, p->weight + 3 * pair);
-  }
+  /* the geometry of every (observation, light) pair, and E c_i (in parts
+   * on the threads: for DiLiGenT's 1.4 M observations, 0.25 s on one) */
+  init_job job = {p, p->threads > 1 && p->count >= INIT_PARALLEL_MIN ? 4 * p->threads : 1};
+  fit_parallel_for(job.parts, p->threads, init_part, &job);
   fit_problem_set_sigma(p, capture, 1.0);
   return CF_OK;
 }
@@ -742,7 +762,7 @@ cf_status fit_problem_init_sample(fit_problem *p, fit_sample *sample, const cf_c
                                   size_t target, cf_error *err) {
   cf_status s = fit_sample_draw(cf_capture_observations(capture), population, target, sample, err);
   if (s != CF_OK) return s;
-  s = fit_problem_init(p, capture, model, sample->index, sample->count, err);
+  s = fit_problem_init(p, capture, model, sample->index, sample->count, 1, err);
   if (s != CF_OK) {
     fit_sample_free(sample);
     return s;

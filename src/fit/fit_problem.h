@@ -104,8 +104,9 @@ typedef struct fit_problem {
    * of a step (0: lsq.h's defaults) */
   double function_tolerance, min_relative_decrease;
   int newton_start; /* lsq.h's: the solves start near a minimum */
-  /* threads for a prediction over every observation (fit_problem_predict;
-   * 1 from fit_problem_init: a problem solved beside others keeps to one) */
+  /* threads for work over every observation (fit_problem_predict, the
+   * pixel footprints; fit_problem_init's: a problem solved beside others
+   * keeps to one) */
   int threads;
   /* optional: ends a solve early (lsq.h's cf_lsq_options.stop) */
   int (*stop)(void *user, const double *x, double cost);
@@ -171,8 +172,11 @@ void fit_sample_free(fit_sample *sample);
  * copied). Without it every weight is 1. */
 cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, cf_error *err);
 
+/* The problem over `count` observations of the capture (index: which;
+ * NULL: all, in order), their pairs' geometry built on `threads` threads,
+ * which predictions and footprints use from then on (p->threads). */
 cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_id model,
-                           const uint32_t *index, size_t count, cf_error *err);
+                           const uint32_t *index, size_t count, int threads, cf_error *err);
 
 /* A weighted sample of about `target` observations of the population
  * (fit_sample_draw) and the problem over it with the sample's weights.

@@ -143,7 +143,8 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
 static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
                                 const fit_population *population, const cf_fit_result *fit,
                                 double sigma, const cf_fit_options *o, cf_error *err) {
-  cf_status s = fit_problem_init(p, capture, fit->model, population->index, population->count, err);
+  cf_status s = fit_problem_init(p, capture, fit->model, population->index, population->count,
+                                 fit_threads(o), err);
   if (s != CF_OK) return s;
   memcpy(p->params, fit->params, sizeof p->params);
   p->log_scale = log(fit->scale);
@@ -152,7 +153,6 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
     p->log_exposures[k] = log(fit->exposures[k]);
   p->loss = o->loss;
   p->loss_scale = o->loss_scale;
-  p->threads = fit_threads(o);
   fit_problem_clear_unknowns(p);
   s = fit_problem_finish(p, err);
   if (s == CF_OK) s = fit_footprint_update(p, capture, o, NULL, err);

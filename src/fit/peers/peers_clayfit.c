@@ -21,7 +21,7 @@ double peers_now(void) {
 static cf_status common_problem(fit_problem *p, const cf_capture *capture, cf_model_id model,
                                 const uint32_t *index, size_t count, const double *params,
                                 int free_all, cf_error *err) {
-  cf_status s = fit_problem_init(p, capture, model, index, count, err);
+  cf_status s = fit_problem_init(p, capture, model, index, count, 1, err);
   if (s != CF_OK) return s;
   for (size_t i = 0; i < 3 * p->count; ++i) p->inv_sigma[i] = 1.0;
   p->sigma = 1.0;
