@@ -11,12 +11,6 @@
  * ones cluster in the highlight: small parts even the threads' work). */
 enum { PARTS_PER_THREAD = 8 };
 
-/* The range [*begin, *end) of part `part` of `parts` over count items. */
-static void part_range(size_t count, int parts, int part, size_t *begin, size_t *end) {
-  *begin = count * (size_t)part / (size_t)parts;
-  *end = count * ((size_t)part + 1) / (size_t)parts;
-}
-
 static int parts_for(const fit_problem *p) {
   int threads = p->threads > 1 ? p->threads : 1;
   return threads > 1 && p->count >= 1024 ? threads * PARTS_PER_THREAD : 1;
@@ -82,7 +76,7 @@ static void choose_part(void *user, int part) {
   choose_job *job = user;
   fit_problem *p = job->p;
   size_t begin, end;
-  part_range(p->count, job->parts, part, &begin, &end);
+  fit_part_range(p->count, job->parts, part, &begin, &end);
   double *scratch = job->scratch + 6 * (size_t)p->lights * (size_t)part;
   const double *bound = p->turn_bound;
   for (size_t i = begin; i < end; ++i) {
@@ -161,7 +155,7 @@ static void rebuild_part(void *user, int part) {
   cf_geometry *geometry = job->geometry;
   double *weight = job->weight;
   size_t first, end;
-  part_range(p->count, job->parts, part, &first, &end);
+  fit_part_range(p->count, job->parts, part, &first, &end);
   double *scratch = job->scratch + 6 * lights * (size_t)part;
   for (size_t i = first; i < end; ++i) {
     size_t k = observation(p, i), at = job->begin[i];

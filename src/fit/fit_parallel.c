@@ -35,3 +35,8 @@ void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), v
   for (int t = 0; t < started; ++t) pthread_join(pool[t], NULL);
   pthread_mutex_destroy(&f.lock);
 }
+
+void fit_part_range(size_t count, int parts, int part, size_t *begin, size_t *end) {
+  *begin = count * (size_t)part / (size_t)parts;
+  *end = count * ((size_t)part + 1) / (size_t)parts;
+}

@@ -7,6 +7,12 @@
 #ifndef CLAYFIT_FIT_PARALLEL_H
 #define CLAYFIT_FIT_PARALLEL_H
 
+#include <stddef.h>
+
 void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user);
+
+/* The items [*begin, *end) of part `part` of `parts` over `count` items in
+ * order (for a fit_parallel_for over parts of one range). */
+void fit_part_range(size_t count, int parts, int part, size_t *begin, size_t *end);
 
 #endif /* CLAYFIT_FIT_PARALLEL_H */

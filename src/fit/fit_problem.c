@@ -95,8 +95,8 @@ static void init_part(void *user, int part) {
   const init_job *job = user;
   fit_problem *p = job->p;
   const cf_observations *o = p->obs;
-  size_t begin = p->count * (size_t)part / (size_t)job->parts;
-  size_t end = p->count * ((size_t)part + 1) / (size_t)job->parts;
+  size_t begin, end;
+  fit_part_range(p->count, job->parts, part, &begin, &end);
   for (size_t i = begin; i < end; ++i) {
     size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
     for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = o->rgb[3 * k + (size_t)c];

@@ -46,7 +46,6 @@ struct BlockCache {
   unsigned long clock = 0;
   // new points Ceres asked the cost at since its last Jacobian (BlockCost)
   int trials = 0;
-  bool missed = false;  // the last at() evaluated
 
   // The block at `point`, from the cache or evaluated into it (the normal
   // equations too when `want_normal`); nullptr when it cannot be
@@ -55,14 +54,12 @@ struct BlockCache {
                             bool want_normal) {
     const int n = problem->num_params;
     ++clock;
-    missed = false;
     for (BlockEvaluation &e : slot)
       if (e.valid && (e.normal || !want_normal) && std::equal(point, point + n, e.x.begin())) {
         ++e.uses;
         e.stamp = clock;
         return &e;
       }
-    missed = true;
     BlockEvaluation &e = replaced();
     e.valid = false;
     if (want_normal) {
@@ -131,7 +128,7 @@ class BlockCost final : public ceres::CostFunction {
       const bool speculate = k <= SPECULATE_COLUMNS && cache_->trials < SPECULATE_TRIALS;
       const BlockEvaluation *e = cache_->at(problem_, block_, k, x, speculate);
       if (e == nullptr) return false;
-      if (cache_->missed) ++cache_->trials;
+      if (e->uses == 0) ++cache_->trials;  // evaluated here: a new point
       std::fill(residuals, residuals + k, 0.0);
       residuals[k] = std::sqrt(2.0 * e->cost);
       return true;
