@@ -29,7 +29,7 @@
 #include "fit_residuals.h"
 #include "fit_run.h"
 #include "fit_uncertainty.h"
-#include "lsq.h"
+#include "lsq/lsq.h"
 
 /* The best start refines on about REFINE_TARGET observations before all of
  * them (each stage starts closer, where iterations cost more). */

@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "core/clock.h"
-#include "fit_parallel.h"
+#include "lsq/parallel.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
@@ -106,7 +106,7 @@ static void fit_candidates(const cf_capture *capture, const cf_fit_options optio
   candidate_work work = {capture, options, train, choice, threads >= 2};
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", 0, CF_MODEL_COUNT);
-  fit_parallel_for(CF_MODEL_COUNT, threads, fit_candidate, &work);
+  cf_parallel_for(CF_MODEL_COUNT, threads, fit_candidate, &work);
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", CF_MODEL_COUNT, CF_MODEL_COUNT);
   choice->count = CF_MODEL_COUNT;
@@ -175,7 +175,7 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
   w->options.loss = choice->loss;
   w->options.loss_scale = choice->loss_scale;
   w->options.threads = threads >= 2 ? 1 : threads; /* each candidate on one thread */
-  fit_parallel_for(choice->count, threads, score_candidate, w);
+  cf_parallel_for(choice->count, threads, score_candidate, w);
   cf_status s = CF_OK;
   for (int m = 0; m < choice->count && s == CF_OK; ++m)
     if (w->status[m] != CF_OK) {

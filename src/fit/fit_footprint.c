@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit_parallel.h"
+#include "lsq/parallel.h"
 
 /* The observations split into this many parts per thread (the integrated
  * ones cluster in the highlight: small parts even the threads' work). */
@@ -76,7 +76,7 @@ static void choose_part(void *user, int part) {
   choose_job *job = user;
   fit_problem *p = job->p;
   size_t begin, end;
-  fit_part_range(p->count, job->parts, part, &begin, &end);
+  cf_part_range(p->count, job->parts, part, &begin, &end);
   double *scratch = job->scratch + 6 * (size_t)p->lights * (size_t)part;
   const double *bound = p->turn_bound;
   for (size_t i = begin; i < end; ++i) {
@@ -121,7 +121,7 @@ static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const
   if (s == CF_OK &&
       !(job.scratch = malloc(6 * (size_t)p->lights * (size_t)job.parts * sizeof *job.scratch)))
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) fit_parallel_for(job.parts, p->threads, choose_part, &job);
+  if (s == CF_OK) cf_parallel_for(job.parts, p->threads, choose_part, &job);
   free(job.scratch);
   return s;
 }
@@ -155,7 +155,7 @@ static void rebuild_part(void *user, int part) {
   cf_geometry *geometry = job->geometry;
   double *weight = job->weight;
   size_t first, end;
-  fit_part_range(p->count, job->parts, part, &first, &end);
+  cf_part_range(p->count, job->parts, part, &first, &end);
   double *scratch = job->scratch + 6 * lights * (size_t)part;
   for (size_t i = first; i < end; ++i) {
     size_t k = observation(p, i), at = job->begin[i];
@@ -216,7 +216,7 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
   }
   rebuild_job job = {p, capture, samples, gauss, begin, geometry, weight, parts, scratch};
-  fit_parallel_for(parts, p->threads, rebuild_part, &job);
+  cf_parallel_for(parts, p->threads, rebuild_part, &job);
   free(scratch);
   free(p->geometry);
   free(p->weight);

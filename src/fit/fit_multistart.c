@@ -5,10 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit_parallel.h"
+#include "lsq/parallel.h"
 #include "fit_residuals.h"
 #include "fit_starts.h"
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "order_statistics.h"
 
 /* Every start runs to convergence (START_ITERATIONS at most) on a
@@ -215,7 +215,7 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
       job->options = *o;
       if (width > 1) job->options.threads = 1;
     }
-    fit_parallel_for(batch, width, run_job, jobs);
+    cf_parallel_for(batch, width, run_job, jobs);
     for (int j = 0; s == CF_OK && j < batch; ++j) { /* in the starts' order */
       start_job *job = &jobs[j];
       if (job->status != CF_OK) {

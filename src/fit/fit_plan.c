@@ -5,7 +5,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "symmetric_eigen.h"
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights

@@ -8,7 +8,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "fit_problem.h"
-#include "lsq.h"
+#include "lsq/lsq.h"
 
 /* What is free: per model slot its status (CF_PARAM_FITTED: free), and
  * whether the global scale and the exposures are. */

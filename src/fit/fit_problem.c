@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit_parallel.h"
+#include "lsq/parallel.h"
 #include "order_statistics.h"
 
 enum { BLOCK_SIZE = 1024 };
@@ -96,7 +96,7 @@ static void init_part(void *user, int part) {
   fit_problem *p = job->p;
   const cf_observations *o = p->obs;
   size_t begin, end;
-  fit_part_range(p->count, job->parts, part, &begin, &end);
+  cf_part_range(p->count, job->parts, part, &begin, &end);
   for (size_t i = begin; i < end; ++i) {
     size_t k = observation(p, i), slot = k * (size_t)p->lights, pair = i * (size_t)p->lights;
     for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = o->rgb[3 * k + (size_t)c];
@@ -141,7 +141,7 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   /* the geometry of every (observation, light) pair, and E c_i (in parts
    * on the threads: for DiLiGenT's 1.4 M observations, 0.25 s on one) */
   init_job job = {p, p->threads > 1 && p->count >= INIT_PARALLEL_MIN ? 4 * p->threads : 1};
-  fit_parallel_for(job.parts, p->threads, init_part, &job);
+  cf_parallel_for(job.parts, p->threads, init_part, &job);
   fit_problem_set_sigma(p, capture, 1.0);
   return CF_OK;
 }
@@ -753,7 +753,7 @@ cf_status fit_problem_predict(const fit_problem *p, double *prediction, double *
   predict_job job = {p, prediction, measured,
                      ((blocks + (size_t)parts - 1) / (size_t)parts) * p->block_size, 0};
   if (job.rows_per_part == 0) job.rows_per_part = 1;
-  fit_parallel_for(parts, parts, predict_part, &job);
+  cf_parallel_for(parts, parts, predict_part, &job);
   return job.failed ? cf_error_set(err, CF_ENOMEM, "out of memory") : CF_OK;
 }
 

@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "fit_plan.h"
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "symmetric_eigen.h"
 
 /* A model slot's standard deviation from its unknown's variance:

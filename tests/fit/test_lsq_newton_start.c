@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;

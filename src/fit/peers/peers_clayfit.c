@@ -8,7 +8,7 @@
 
 #include "../fit_plan.h"
 #include "../fit_problem.h"
-#include "../lsq.h"
+#include "lsq/lsq.h"
 
 double peers_now(void) {
   struct timespec t;

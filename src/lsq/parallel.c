@@ -1,5 +1,5 @@
-/* Independent pieces of a fit side by side (fit_parallel.h). */
-#include "fit_parallel.h"
+/* Independent pieces of work side by side (parallel.h). */
+#include "parallel.h"
 
 #include <pthread.h>
 
@@ -23,7 +23,7 @@ static void *worker(void *arg) {
   }
 }
 
-void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user) {
+void cf_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user) {
   parallel_for f = {count, 0, work, user, PTHREAD_MUTEX_INITIALIZER};
   if (threads > MOST_THREADS) threads = MOST_THREADS;
   if (threads > count) threads = count;
@@ -36,7 +36,7 @@ void fit_parallel_for(int count, int threads, void (*work)(void *user, int i), v
   pthread_mutex_destroy(&f.lock);
 }
 
-void fit_part_range(size_t count, int parts, int part, size_t *begin, size_t *end) {
+void cf_part_range(size_t count, int parts, int part, size_t *begin, size_t *end) {
   *begin = count * (size_t)part / (size_t)parts;
   *end = count * ((size_t)part + 1) / (size_t)parts;
 }

@@ -3,9 +3,9 @@
  * and many residual blocks, each evaluated by a C callback, and gets back
  * the minimiser, Ceres' summary and, on request, the covariance
  * (ceres::Covariance). This is the only place that includes Ceres. Private
- * to src/fit. */
-#ifndef CLAYFIT_FIT_LSQ_H
-#define CLAYFIT_FIT_LSQ_H
+ * to the layers above src/lsq (capture's sphere fit, fit). */
+#ifndef CLAYFIT_LSQ_LSQ_H
+#define CLAYFIT_LSQ_LSQ_H
 
 #include <stddef.h>
 
@@ -25,10 +25,12 @@ extern "C" {
  * √ρ-transformed residuals would halve it); either way |u|² <= 2 cost.
  * The callback accumulates JᵀJ as it evaluates, over each residual's
  * nonzero entries only, and never forms J: that is the whole price of a
- * Jacobian beyond the model's own gradient. Returns 0 when the block
- * cannot be computed there (not finite): the solver then rejects the
- * step. Called from several threads at once, never for the same block
- * at the same time. */
+ * Jacobian beyond the model's own gradient. Returns CF_LSQ_EVALUATED, or
+ * CF_LSQ_NOT_FINITE when the block is not finite there (the solver then
+ * rejects the step), or CF_LSQ_FAILED when it could not be computed at
+ * all (out of memory: the solve ends with CF_ENOMEM). Called from several
+ * threads at once, never for the same block at the same time. */
+enum { CF_LSQ_FAILED = -1, CF_LSQ_NOT_FINITE = 0, CF_LSQ_EVALUATED = 1 };
 typedef int (*cf_lsq_evaluate)(void *user, const double *x, size_t block, double *cost, double *jtj,
                                double *jtu);
 
@@ -155,4 +157,4 @@ cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance, int *r
 }
 #endif
 
-#endif /* CLAYFIT_FIT_LSQ_H */
+#endif /* CLAYFIT_LSQ_LSQ_H */
