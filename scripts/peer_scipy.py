@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The SciPy peer of clayfit-peers (issue 6): what a researcher would write
-instead of clayfit. MODEL.md's M2 (dielectric) and M4 (clay), vectorised in
+instead of clayfit. M2 (dielectric) and M4 (clay) of docs/model.md, vectorised in
 NumPy over every observation, fitted by scipy.optimize.least_squares
 (method 'trf', bounds, the default 2-point finite-difference Jacobian).
 
@@ -82,7 +82,7 @@ def dielectric(p, n, l, v):
 
 
 def clay(p, n, l, v):
-    """M4 (MODEL.md, steps 1-8) at every (n, l, v): N x 3."""
+    """M4 (docs/model.md §3.5, steps 1-8) at every (n, l, v): N x 3."""
     rho, sigma, r1, f0_1 = p[0:3], p[3], p[4], p[5]
     tau, r2, f0_2 = p[6:9], p[9], p[10]
     c_i, c_o = dot(n, l), dot(n, v)

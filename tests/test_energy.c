@@ -1,4 +1,4 @@
-/* Energy (MODEL.md, "Properties every model must satisfy"): with ρ = 1 the
+/* Energy (docs/model.md §4.3, (33)): with ρ = 1 the
  * directional albedo ∫ f c_i dω is <= 1 + 1e-3 for M0, M2 and M4 and
  * <= 1.016 for M1 at 8 view angles down to c_o = 0.01, over extreme and
  * random in-range parameter sets; M3's maximum is printed, not asserted.

@@ -1,4 +1,4 @@
-/* Every analytic derivative against MODEL.md's finite difference (step
+/* Every analytic derivative against the finite difference of docs/model.md (34) (step
  * 1e-6 max(|x|, 1), central inside the range, one-sided at a bound), on
  * 10^4 random cases per model plus the hard-case grid, with the mixed
  * tolerance |g − g_fd| <= ε_a + ε_r max(|g|, |g_fd|).

@@ -1,5 +1,5 @@
 /* Values finite and non-negative, gradients finite, on the grid of hard
- * cases (MODEL.md, "Properties every model must satisfy"): cosines down to
+ * cases (docs/model.md §4.1): cosines down to
  * 1e-300 on either side, l = v, l mirrored about n, l + v = 0 at the
  * horizon, every parameter at its bounds and default, optical depth 1e3. */
 #include <math.h>

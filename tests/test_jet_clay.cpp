@@ -1,5 +1,5 @@
 // An independent check of the C evaluator's M4 (clay) and M2 (dielectric):
-// the models written a second time, straight from MODEL.md's vector
+// the models written a second time, straight from docs/model.md's vector
 // formulas (refracted direction vectors l', v', half vectors, the textbook
 // forms of D and ON), templated on the scalar (src/fit/peers/jet_model.h,
 // shared with the peers benchmark) and differentiated by ceres::Jet

@@ -23,7 +23,7 @@ int main(void) {
   }
   CHECK(cf_param_info_get(CF_PARAM_COUNT) == NULL, "out-of-range id");
 
-  /* MODEL.md's ranges, checked against the table */
+  /* docs/model.md §1.6's ranges, checked against the table */
   CHECK(cf_param_info_get(CF_PARAM_FILM_F0)->lower == 0.01, "F0_1 floor");
   CHECK(cf_param_info_get(CF_PARAM_ROUGHNESS)->lower == 0.03, "roughness floor");
   CHECK(cf_param_info_get(CF_PARAM_OPTICAL_DEPTH)->upper == 8.0, "tau bound");

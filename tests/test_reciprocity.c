@@ -1,4 +1,4 @@
-/* Helmholtz reciprocity as MODEL.md states it:
+/* Helmholtz reciprocity as docs/model.md (32) states it:
  *   |f(l, v) − f(v, l)| <= 1e-12 · max(|f(l, v)|, |f(v, l)|)
  * on 10^5 random direction pairs with random in-range parameters for every
  * model, including l = v and grazing pairs. */

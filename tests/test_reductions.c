@@ -1,4 +1,4 @@
-/* The exact reductions of MODEL.md: M1 with σ = 0 is M0; M3 with w_c = 0 is
+/* The exact reductions of docs/model.md §4.5: M1 with σ = 0 is M0; M3 with w_c = 0 is
  * M2; M4 with τ = 0 has a = 1; M4 with τ large (exp underflows) is its top
  * specular S(F0_1, r1; l, v), which M2 with ρ = 0 computes independently. */
 #include <math.h>

@@ -97,8 +97,8 @@ const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t in
  * zero for unused slots). For a normal map, normals between pixel centres
  * are interpolated bilinearly. Returns 1, or 0 where that point does not
  * see the sphere (or i is not an observation). What the fitter uses to
- * integrate a lobe narrower than a pixel over the pixel (MODEL.md, "Image
- * formation"). */
+ * integrate a lobe narrower than a pixel over the pixel (docs/model.md
+ * §5.6). */
 int cf_capture_footprint_at(const cf_capture *capture, size_t i, double du, double dv,
                             double normal[3], double view[3], double *light_dir,
                             double *irradiance);

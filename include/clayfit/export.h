@@ -1,6 +1,6 @@
 /* clayfit: material presets from a fit (clayfit export).
  *
- * A fit.json read back (cf_fit_file_read in clayfit/fit.h) becomes a
+ * A fit.json read back (cf_fit_file_read in clayfit/fit_file.h) becomes a
  * material in one of these formats:
  *   json          clayfit's own preset (data_schema/preset.schema.json):
  *                 lossless, the model and its parameters with units,
@@ -13,14 +13,14 @@
  *   blender       a Blender 4 Python script building a Principled BSDF
  *   mitsuba       a Mitsuba 3 scene fragment (diffuse, roughplastic or
  *                 principled)
- * No target has every term of MODEL.md's models: each file says in a
+ * No target has every term of the models of docs/model.md §3: each file says in a
  * comment which parameters map exactly, which approximately and what is
  * dropped, and every value a target cannot take is a warning (never
  * silently clamped). The mapping is in src/export/export_mapping.c. */
 #ifndef CLAYFIT_EXPORT_H
 #define CLAYFIT_EXPORT_H
 
-#include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "clayfit/model.h"
 #include "clayfit/status.h"
 

@@ -13,7 +13,7 @@
  *   ρ        Huber (default), Cauchy, or the identity, in units of σ.
  * A clipped channel is censored: it only counts while the model predicts
  * less than the clip level (the true value is at least what was seen).
- * Bounds are MODEL.md's ranges, enforced by the solver (Ceres, Levenberg-
+ * Bounds are the ranges of docs/model.md §1.6, enforced by the solver (Ceres, Levenberg-
  * Marquardt); nothing is clamped. */
 #ifndef CLAYFIT_FIT_H
 #define CLAYFIT_FIT_H
@@ -82,7 +82,7 @@ typedef struct cf_fit_options {
   const unsigned char *use_image; /* NULL: every image; else fit only the
                              observations of images k with use_image[k]
                              (for example to predict held-out lights) */
-  /* the pixel footprint (MODEL.md, "Image formation"): 0 (the default)
+  /* the pixel footprint (docs/model.md §5.6): 0 (the default)
    * integrates an observation over its pixel with S × S samples (Gauss-
    * Legendre pairs, cf_footprint_offset) where a lobe is narrower than the
    * pixel (cf_footprint_samples at the fit's parameters, to a relative
@@ -102,10 +102,16 @@ typedef struct cf_fit_options {
                              (mean absorption 0.8) */
   cf_progress_fn progress;
   void *progress_user;
+  /* optional: one line of text for every iteration of every solve and
+   * every decision of the solver around Ceres (clayfit fit --trace), to
+   * study convergence; called from the fit's threads, one solve at a time
+   * per model */
+  void (*trace)(void *user, const char *line);
+  void *trace_user;
 } cf_fit_options;
 
 /* The default pixel budget: 10⁵ observations, stratified by half-angle.
- * Measured (clayfit bench fit, README): on the synthetic captures and on
+ * Measured (clayfit bench fit, docs/benchmarks.md): on the synthetic captures and on
  * DiLiGenT the relative RMSE over every observation stays within 1 % of
  * the fit to all of them (10⁴ failed on DiLiGenT: too few highlight
  * pixels), at a half to a third of the time; the standard deviations are
@@ -302,28 +308,7 @@ cf_status cf_fit_predict(const cf_capture *capture, const cf_fit_result *fit,
 
 const char *cf_param_status_name(cf_param_status status);
 
-/* ---- reading fit.json back (for clayfit export and clayfit report) ---- */
-typedef struct cf_fit_file {
-  cf_fit_result result;     /* model, params, sd (NaN for null), status, scale/scale_sd/scale_fitted,
-                               response/response_sd/response_fitted, sigma, images, exposures
-                               (owned), rmse, relative_rmse, residual counts, image_rmse and
-                               image_relative_rmse (owned): as far as fit.json holds them */
-  char clayfit_version[32], created[32];
-  char capture_path[4096];  /* as written in fit.json if that file exists (relative to the
-                               current directory), else relative to fit.json's folder */
-  char capture_name[256];
-  char radiometry[32];      /* "absolute", "relative" or "from_reference" */
-  double density;           /* derived.density (NaN when derived is null) */
-  double absorption[3];     /* NaN where undefined */
-  char density_convention[512];
-  char loss[16];            /* loss.type */
-  double loss_scale;        /* loss.scale_sigma */
-  int footprint;            /* cf_fit_options.footprint: 0 auto, 1 centre, S fixed */
-  double footprint_tolerance;
-} cf_fit_file;
-/* Read fit.json back (untrusted: every field type- and range-checked, errors name the file and the JSON path). */
-cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err);
-void cf_fit_file_free(cf_fit_file *file);
+/* fit.json, written and read back: include/clayfit/fit_file.h */
 
 #ifdef __cplusplus
 }

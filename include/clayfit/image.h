@@ -92,7 +92,7 @@ typedef struct cf_decode {
   double gamma;       /* for CF_TRANSFER_GAMMA, > 0 */
   double black_level; /* linear units */
   double clip_level;  /* stored units, in (0, +inf]; +inf for never */
-  double exposure;    /* relative exposure e_k of MODEL.md's image formation */
+  double exposure;    /* relative exposure e_k (docs/model.md (38)) */
 } cf_decode;
 
 /* Decode the first three channels of one stored pixel; returns the

@@ -1,4 +1,4 @@
-/* clayfit: the layered clay reflectance model (MODEL.md), evaluated in C.
+/* clayfit: the layered clay reflectance model (docs/model.md), evaluated in C.
  *
  * What the evaluator returns
  * --------------------------
@@ -8,8 +8,8 @@
  * On request it also returns the exact analytic derivative of every channel
  * with respect to every entry of the parameter vector.
  *
- * Conventions (MODEL.md, "Conventions")
- * -------------------------------------
+ * Conventions (docs/model.md §1)
+ * -------------------------------
  * - n, l, v are unit vectors pointing away from the surface: the outward
  *   normal, toward the light, toward the camera. The evaluator does not
  *   normalise them (the CLI does); give unit vectors.
@@ -21,7 +21,7 @@
  * - Roughness is perceptual: the GGX width is α = r².
  * - F0 is the reflectance at normal incidence; η = (1 + √F0)/(1 − √F0).
  * - Parameters are used exactly as given, never clamped. Their ranges
- *   (cf_param_info.lower/upper, MODEL.md's fit bounds) are for the caller
+ *   (cf_param_info.lower/upper, docs/model.md §1.6) are for the caller
  *   and the solver to enforce; cf_params_check() tests a vector against
  *   them. Outside the ranges the result may be meaningless or not finite.
  *
@@ -58,11 +58,11 @@ extern "C" {
 /* ---------------------------------------------------------------------
  * The parameter table: the one place that describes every parameter.
  * X(ID, name, symbol, components, unit, default, lower, upper, meaning)
- * name: as in MODEL.md's naming table (files, CLI, reports, presets).
+ * name: as in docs/model.md §1.5 (files, CLI, reports, presets).
  * unit: "1" for dimensionless, "rad" for radians.
  * default: the value used when none is given (and, later, held when a
  *   capture does not constrain the parameter).
- * lower, upper: MODEL.md's ranges (the fit bounds), inclusive.
+ * lower, upper: the ranges of docs/model.md §1.6 (the fit bounds), inclusive.
  * ------------------------------------------------------------------- */
 /* clang-format off */
 #define CF_PARAM_MAP(X)                                                        \
@@ -108,7 +108,7 @@ enum {
 };
 
 /* ---------------------------------------------------------------------
- * The model ladder (MODEL.md, "The model ladder"): each model's parameters
+ * The model ladder (docs/model.md §3): each model's parameters
  * in vector order, then X(ID, code, name, params list, summary).
  * ------------------------------------------------------------------- */
 /* clang-format off */
@@ -158,11 +158,11 @@ CF_MODEL_MAP(CF__SLOT_ENUM)
 typedef struct cf_param_info {
   cf_param_id id;
   const char *name;   /* "albedo" */
-  const char *symbol; /* ASCII spelling of MODEL.md's symbol: "rho" */
+  const char *symbol; /* ASCII spelling of the symbol in docs/model.md: "rho" */
   int components;     /* 1 (scalar) or 3 (linear RGB) */
   const char *unit;   /* "1" (dimensionless) or "rad" */
   double default_value;
-  double lower, upper; /* inclusive range, MODEL.md's fit bounds */
+  double lower, upper; /* inclusive range, the fit bounds (docs/model.md §1.6) */
   const char *meaning;
 } cf_param_info;
 
@@ -191,6 +191,14 @@ cf_status cf_model_find(const char *code_or_name, cf_model_id *id, cf_error *err
 cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
                               const cf_param_info **info, cf_error *err);
 
+/* The parameter that owns vector entry (slot) k of a model, and the
+ * entry's component within it in *component (0 for a scalar parameter;
+ * 0, 1, 2 for the r, g, b of an RGB one; optional, NULL). NULL for an
+ * invalid model or an entry it does not have (k outside [0, dim)). The one
+ * slot-to-parameter lookup: every caller asking which parameter a slot
+ * belongs to (its range, unit, channel) goes through it. */
+const cf_param_info *cf_model_slot_param(cf_model_id model, int k, int *component);
+
 /* Name of vector entry k of a model: "albedo[1]" style for RGB entries is
  * written into buf (at least 32 bytes); returns buf. */
 const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size);
@@ -217,7 +225,7 @@ cf_status cf_params_check(cf_model_id model, const double *params, cf_error *err
  *   cos_i = n·l, cos_o = n·v,
  *   t_sq  = |l_t + v_t|²  (so |l + v|² = t_sq + (cos_i + cos_o)²),
  *   g     = l_t·v_t = l·v − c_i c_o.
- * Every formula of MODEL.md is written in these; computing them from the
+ * Every formula of docs/model.md is written in these ((3), (4)); computing them from the
  * tangent parts keeps the half vector's sin²θ_h accurate at a mirror
  * configuration, and every expression is symmetric in l and v, so f is
  * reciprocal to the last bit.
@@ -268,7 +276,7 @@ cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size
                                    double *grad);
 
 /* ---------------------------------------------------------------------
- * Pixel footprints (MODEL.md, "Image formation"): a pixel measures the
+ * Pixel footprints (docs/model.md §5.6): a pixel measures the
  * mean of f over its footprint on the sphere, and where a lobe is narrower
  * than the footprint its value at the pixel centre is not that mean.
  * ------------------------------------------------------------------- */

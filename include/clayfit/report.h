@@ -26,7 +26,7 @@
 #define CLAYFIT_REPORT_H
 
 #include "clayfit/capture.h"
-#include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "clayfit/status.h"
 
 #ifdef __cplusplus

@@ -1,4 +1,4 @@
-/* clayfit: synthetic captures with known parameters, rendered by MODEL.md's
+/* clayfit: synthetic captures with known parameters, rendered by docs/model.md §5's
  * image formation with the evaluator: a clay sphere on a textured ground
  * inside a textured backdrop (so that COLMAP can match features), an orbit
  * of cameras each with its flash, photon and read noise. It writes the

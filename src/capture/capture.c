@@ -40,7 +40,7 @@ cf_decode capture_image_decode(const cf_capture *capture, const cf_image_info *i
 }
 
 /* colour.exposure "exif": the exposures' reference is their geometric mean
- * (MODEL.md: fix the reference, or exposures trade with ρ and F0). The
+ * (docs/model.md (39): fix the reference, or exposures trade with ρ and F0). The
  * radiances were divided by the raw exposures; rescale them. */
 static void normalise_exif_exposures(cf_capture *capture) {
   size_t n = capture->spec.num_images;

@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "core/file.h"
-#include "json_reader.h"
+#include "core/json_reader.h"
 
 enum {
   MAX_CAPTURE_FILE = 64 << 20, /* bytes */

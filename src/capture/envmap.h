@@ -1,7 +1,7 @@
 /* An environment map reduced to K directional lights by median cut
  * (Debevec 2005, "A Median Cut Algorithm for Light Probe Sampling"), for
- * MODEL.md's image formation ("an environment map: approximated by K
- * directional lights"). Private to src/capture. */
+ * the image formation of docs/model.md §5.2 (an environment map approximated by K
+ * directional lights). Private to src/capture. */
 #ifndef CLAYFIT_CAPTURE_ENVMAP_H
 #define CLAYFIT_CAPTURE_ENVMAP_H
 
@@ -12,7 +12,7 @@
 
 /* A directional light: the unit direction toward the light (world frame)
  * and its irradiance E per linear-RGB channel, measured perpendicular to
- * the direction (MODEL.md: L = f E c_i). */
+ * the direction (docs/model.md (5): L = f E c_i). */
 typedef struct cf_directional_light {
   double direction[3];
   double irradiance[3];

@@ -1,4 +1,4 @@
-/* The lights of MODEL.md's image formation (src/capture/lights.h). */
+/* The lights of docs/model.md §5.2 (src/capture/lights.h). */
 #include "lights.h"
 
 #include <math.h>

@@ -1,4 +1,4 @@
-/* Lights of a capture (MODEL.md, "Image formation"): what each gives a
+/* Lights of a capture (docs/model.md §5.2): what each gives a
  * surface point, the direction toward it and the irradiance it brings.
  * Private to src/capture. */
 #ifndef CLAYFIT_CAPTURE_LIGHTS_H

@@ -4,14 +4,17 @@
  * Every silhouette ray of a view is tangent to the sphere, so the distance
  * from the sphere's centre C to the ray's line equals the radius R. The fit
  * minimises Σ (|(C − O) × d| − R)² over all rays d of all views (origin O)
- * by Levenberg-Marquardt (Marquardt 1963, with the diagonal scaling of
- * Moré 1978), from a closed-form start: the least-squares intersection of
+ * by Levenberg-Marquardt through the least-squares layer (src/lsq, Ceres),
+ * from a closed-form start: the least-squares intersection of
  * the views' central rays (Hartley & Zisserman 2004, the "midpoint" of
  * many lines: Σ (I − a aᵀ) C = Σ (I − a aᵀ) O) and the mean of
  * |C − O| sin(mean angle of the rays to the central ray). */
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
+#include "lsq/linalg.h"
+#include "lsq/lsq.h"
 #include "sphere_silhouette.h"
 
 /* A reciprocal condition number below this makes a matrix singular here. */
@@ -32,7 +35,7 @@ int cf_sphere_normal_orthographic(const cf_ellipse *circle, double x, double y, 
   return 1;
 }
 
-/* ---- small dense linear algebra ---- */
+/* ---- small vectors ---- */
 
 static double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -48,81 +51,15 @@ static double norm3(const double a[3]) {
   return sqrt(dot3(a, a));
 }
 
-/* Eigenvalues of a symmetric n×n matrix (n <= 4, row-major) by cyclic
- * Jacobi rotations (Golub & Van Loan, "Matrix Computations", §8.5). */
-static void symmetric_eigenvalues(const double *m, int n, double *eigenvalues) {
-  double a[16];
-  for (int k = 0; k < n * n; ++k) a[k] = m[k];
-  for (int sweep = 0; sweep < 64; ++sweep) {
-    double off = 0.0, total = 0.0;
-    for (int p = 0; p < n; ++p)
-      for (int q = 0; q < n; ++q) {
-        total += a[p * n + q] * a[p * n + q];
-        if (p != q) off += a[p * n + q] * a[p * n + q];
-      }
-    if (off <= 1e-30 * total) break;
-    for (int p = 0; p < n - 1; ++p)
-      for (int q = p + 1; q < n; ++q) {
-        double apq = a[p * n + q];
-        if (apq == 0.0) continue;
-        double theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-        double t = (theta >= 0.0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
-        double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
-        for (int k = 0; k < n; ++k) { /* columns p, q */
-          double akp = a[k * n + p], akq = a[k * n + q];
-          a[k * n + p] = c * akp - s * akq;
-          a[k * n + q] = s * akp + c * akq;
-        }
-        for (int k = 0; k < n; ++k) { /* rows p, q */
-          double apk = a[p * n + k], aqk = a[q * n + k];
-          a[p * n + k] = c * apk - s * aqk;
-          a[q * n + k] = s * apk + c * aqk;
-        }
-      }
-  }
-  for (int k = 0; k < n; ++k) eigenvalues[k] = a[k * n + k];
-}
-
-/* λmin / λmax of a symmetric positive semi-definite matrix (0 if λmax <= 0). */
-static double reciprocal_condition(const double *m, int n) {
-  double ev[4];
-  symmetric_eigenvalues(m, n, ev);
-  double lo = ev[0], hi = ev[0];
-  for (int k = 1; k < n; ++k) {
-    if (ev[k] < lo) lo = ev[k];
-    if (ev[k] > hi) hi = ev[k];
-  }
+/* λmin / λmax of a symmetric positive semi-definite n × n matrix (row-major,
+ * n <= 4): 0 when λmax <= 0 or the matrix cannot be decomposed (not
+ * finite). */
+static double reciprocal_condition(int n, const double *m) {
+  double values[4];
+  if (!cf_symmetric_eigen(n, m, values, NULL)) return 0.0;
+  double lo = values[0], hi = values[n - 1]; /* ascending */
   if (!(hi > 0.0) || !isfinite(hi)) return 0.0;
   return lo > 0.0 ? lo / hi : 0.0;
-}
-
-/* Solve m x = b (symmetric positive definite, n <= 4) by Cholesky; 0 if a
- * pivot is not positive. */
-static int cholesky_solve(const double *m, const double *b, int n, double *x) {
-  double l[16] = {0};
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j <= i; ++j) {
-      double s = m[i * n + j];
-      for (int k = 0; k < j; ++k) s -= l[i * n + k] * l[j * n + k];
-      if (i == j) {
-        if (!(s > 0.0)) return 0;
-        l[i * n + i] = sqrt(s);
-      } else {
-        l[i * n + j] = s / l[j * n + j];
-      }
-    }
-  double y[4];
-  for (int i = 0; i < n; ++i) {
-    double s = b[i];
-    for (int k = 0; k < i; ++k) s -= l[i * n + k] * y[k];
-    y[i] = s / l[i * n + i];
-  }
-  for (int i = n - 1; i >= 0; --i) {
-    double s = y[i];
-    for (int k = i + 1; k < n; ++k) s -= l[k * n + i] * x[k];
-    x[i] = s / l[i * n + i];
-  }
-  return 1;
 }
 
 /* ---- the problem ---- */
@@ -184,43 +121,88 @@ static cf_status check_views(const cf_silhouette_view *views, size_t num_views, 
   return CF_OK;
 }
 
-/* The normal equations of the Gauss-Newton step at (center, radius):
- * jtj = JᵀJ, jtr = Jᵀr; returns the cost Σ r². The residual of a ray is
- * |w × d| − R with w = C − O; its gradient is ((w − (w·d) d)/|w × d|, −1). */
-static double normal_equations(const cf_silhouette_view *views, size_t num_views,
-                               const double center[3], double radius, double jtj[16],
-                               double jtr[4]) {
-  double cost = 0.0;
-  for (int k = 0; k < 16; ++k) jtj[k] = 0.0;
-  for (int k = 0; k < 4; ++k) jtr[k] = 0.0;
-  for (size_t v = 0; v < num_views; ++v) {
-    const cf_silhouette_view *view = &views[v];
-    double w[3] = {center[0] - view->origin[0], center[1] - view->origin[1],
-                   center[2] - view->origin[2]};
-    for (size_t i = 0; i < view->count; ++i) {
-      double d[3];
-      unit_ray(view, i, d);
-      double wd = dot3(w, d);
-      double perp[3] = {w[0] - wd * d[0], w[1] - wd * d[1], w[2] - wd * d[2]};
-      double dist = norm3(perp);
-      double res = dist - radius;
-      double g[4] = {0.0, 0.0, 0.0, -1.0};
-      if (dist > 0.0)
-        for (int k = 0; k < 3; ++k) g[k] = perp[k] / dist;
-      for (int p = 0; p < 4; ++p) {
-        jtr[p] += g[p] * res;
-        for (int q = 0; q < 4; ++q) jtj[p * 4 + q] += g[p] * g[q];
-      }
-      cost += res * res;
+/* ---- the least squares, through src/lsq (lsq.h) ----
+ *
+ * Unknowns x = (C, R): the centre and the radius. One residual per ray d
+ * (unit) of a view with camera centre O:
+ *   r(C, R) = |w × d| − R,  w = C − O,
+ * the distance from C to the ray's line less the radius, with the gradient
+ *   ∂r/∂C = p / |p|,  ∂r/∂R = −1,  p = w − (w·d) d
+ * (p is w's part across the ray, |p| = |w × d|). cf_lsq_solve minimises
+ * ½ Σ r² over all views' rays by Levenberg-Marquardt (Ceres), from the
+ * cost and the normal equations JᵀJ, Jᵀr.
+ *
+ * All rays are one residual block. A view alone hardly constrains the
+ * sphere (moving C toward its camera while shrinking R keeps its cone to
+ * first order), so one block per view would have nearly singular normal
+ * equations, and the layer's compression of a block (lsq.h: Λ^(−1/2) Vᵀ
+ * Jᵀr) would divide their rounding errors by that small eigenvalue
+ * (measured: a cost off by 1e-11 of itself, and solves that stopped up
+ * to 5e-8 R short of the minimum; test_sphere_fit's at_minimum); the sum
+ * over all views is well conditioned (the fit refuses a reciprocal
+ * condition number under RCOND_MIN). */
+
+enum { NUM_UNKNOWNS = 4 }; /* C x, y, z; R */
+
+typedef struct sphere_problem {
+  const cf_silhouette_view *views;
+  size_t num_views;
+} sphere_problem;
+
+/* One view's share of the cost Σ r² (returned) and, when a is not NULL,
+ * of JᵀJ and Jᵀr, added to a (4 × 4) and b (4). */
+static double view_share(const cf_silhouette_view *view, const double x[NUM_UNKNOWNS], double *a,
+                         double *b) {
+  const double w[3] = {x[0] - view->origin[0], x[1] - view->origin[1], x[2] - view->origin[2]};
+  double sum = 0.0;
+  for (size_t i = 0; i < view->count; ++i) {
+    double d[3];
+    unit_ray(view, i, d);
+    double wd = dot3(w, d);
+    double p[3] = {w[0] - wd * d[0], w[1] - wd * d[1], w[2] - wd * d[2]};
+    double distance = norm3(p);
+    double r = distance - x[3];
+    sum += r * r;
+    if (!a) continue;
+    double g[4] = {0.0, 0.0, 0.0, -1.0};
+    if (distance > 0.0)
+      for (int k = 0; k < 3; ++k) g[k] = p[k] / distance;
+    for (int j = 0; j < 4; ++j) {
+      b[j] += g[j] * r;
+      for (int k = 0; k < 4; ++k) a[j * 4 + k] += g[j] * g[k];
     }
   }
-  return cost;
+  return sum;
 }
 
-static double cost_at(const cf_silhouette_view *views, size_t num_views, const double center[3],
-                      double radius) {
-  double jtj[16], jtr[4];
-  return normal_equations(views, num_views, center, radius, jtj, jtr);
+/* The one residual block, all rays, at x = (C, R) (cf_lsq_evaluate): its
+ * cost ½ Σ r² and, when jtj is not NULL, JᵀJ (4 × 4) and Jᵀr (4). A
+ * radius at or below 0 is no sphere: not finite there, so that the solver
+ * rejects a step that takes it there. */
+static int all_rays(void *user, const double *x, size_t block, double *cost, double *jtj,
+                    double *jtu) {
+  const sphere_problem *problem = user;
+  (void)block;
+  if (!(x[3] > 0.0)) return CF_LSQ_NOT_FINITE;
+  double sum = 0.0, a[16] = {0}, b[4] = {0};
+  for (size_t v = 0; v < problem->num_views; ++v)
+    sum += view_share(&problem->views[v], x, jtj ? a : NULL, b);
+  *cost = 0.5 * sum;
+  if (!isfinite(*cost)) return CF_LSQ_NOT_FINITE;
+  if (jtj) {
+    memcpy(jtj, a, sizeof a);
+    memcpy(jtu, b, sizeof b);
+  }
+  return CF_LSQ_EVALUATED;
+}
+
+/* The block's residuals depend on all four unknowns. */
+static int all_unknowns(void *user, size_t block, const int **columns) {
+  static const int every[NUM_UNKNOWNS] = {0, 1, 2, 3};
+  (void)user;
+  (void)block;
+  *columns = every;
+  return NUM_UNKNOWNS;
 }
 
 /* Ray i of a view as a unit vector on the same side as ray 0 (a ray is a
@@ -267,9 +249,9 @@ static cf_status closed_form_start(const cf_silhouette_view *views, size_t num_v
         b[p] += m * view->origin[q];
       }
   }
-  double rcond = reciprocal_condition(a, 3);
+  double rcond = reciprocal_condition(3, a);
   double x[3];
-  if (rcond < RCOND_MIN || !cholesky_solve(a, b, 3, x))
+  if (rcond < RCOND_MIN || !cf_cholesky_solve(3, a, b, x))
     return cf_error_set(err, CF_ENUMERIC,
                         "The central rays of the %zu silhouette views are parallel or coincide "
                         "(reciprocal condition number %.3g), so they do not locate the sphere: "
@@ -296,8 +278,20 @@ static cf_status closed_form_start(const cf_silhouette_view *views, size_t num_v
   return CF_OK;
 }
 
-/* rms_px and max_px: the angle between each ray and the tangent cone from
- * its view's origin, times focal_px. */
+double cf_sphere_ray_error_px(const cf_silhouette_view *view, const double ray[3],
+                              const cf_sphere_fit *fit) {
+  double w[3] = {fit->center[0] - view->origin[0], fit->center[1] - view->origin[1],
+                 fit->center[2] - view->origin[2]};
+  double length = norm3(ray), d[3], c[3];
+  for (int k = 0; k < 3; ++k) d[k] = ray[k] / length;
+  cross3(w, d, c);
+  double ray_angle = atan2(norm3(c), fabs(dot3(w, d))); /* a ray is a line: its sign is free */
+  double cone_angle = asin(fmin(1.0, fit->radius / norm3(w)));
+  return fabs(ray_angle - cone_angle) * view->focal_px;
+}
+
+/* rms_px and max_px over all rays (cf_sphere_ray_error_px); CF_ENUMERIC
+ * when the sphere contains a camera. */
 static cf_status report_errors(const cf_silhouette_view *views, size_t num_views,
                                cf_sphere_fit *fit, cf_error *err) {
   double sum2 = 0.0, max_px = 0.0;
@@ -306,19 +300,13 @@ static cf_status report_errors(const cf_silhouette_view *views, size_t num_views
     const cf_silhouette_view *view = &views[v];
     double w[3] = {fit->center[0] - view->origin[0], fit->center[1] - view->origin[1],
                    fit->center[2] - view->origin[2]};
-    double distance = norm3(w);
-    if (!(distance > fit->radius))
+    if (!(norm3(w) > fit->radius))
       return cf_error_set(err, CF_ENUMERIC,
                           "The fitted sphere (centre %g %g %g, radius %g) contains the camera of "
                           "silhouette view %zu, so it cannot be the sphere those views see.",
                           fit->center[0], fit->center[1], fit->center[2], fit->radius, v);
-    double half_angle = asin(fit->radius / distance);
     for (size_t i = 0; i < view->count; ++i) {
-      double d[3], c[3];
-      unit_ray(view, i, d);
-      cross3(w, d, c);
-      double angle = atan2(norm3(c), fabs(dot3(w, d)));
-      double e = fabs(angle - half_angle) * view->focal_px;
+      double e = cf_sphere_ray_error_px(view, view->rays + 3 * i, fit);
       sum2 += e * e;
       if (e > max_px) max_px = e;
       ++count;
@@ -327,6 +315,33 @@ static cf_status report_errors(const cf_silhouette_view *views, size_t num_views
   fit->rms_px = sqrt(sum2 / (double)count);
   fit->max_px = max_px;
   return CF_OK;
+}
+
+/* The message of a normal matrix JᵀJ too ill-conditioned `where` ("at the
+ * start", "at the solution"). */
+static cf_status singular(cf_error *err, const char *where, double rcond, size_t num_views) {
+  return cf_error_set(err, CF_ENUMERIC,
+                      "The sphere fit's normal matrix is singular %s (reciprocal condition "
+                      "number %.3g): the %zu silhouette views do not constrain the sphere's "
+                      "centre and radius (for example, they all see it from one place or along "
+                      "one line).",
+                      where, rcond, num_views);
+}
+
+/* The solve's options: one thread (the problem is one block), and
+ * tolerances just above rounding, so that the solve ends where the cost
+ * stops telling steps apart: a step under 1e-13 of |x|, or a change of the
+ * cost under 1e-14 of itself (its rounding errors at the minimum, measured
+ * on silhouettes of synthetic captures: up to 4e-15; below that, steps are
+ * rejected on rounding alone until the trust region collapses). */
+static void solve_options(cf_lsq_options *options, double *final_jtj) {
+  cf_lsq_default_options(options);
+  options->max_iterations = MAX_ITERATIONS;
+  options->threads = 1;
+  options->function_tolerance = 1e-14;
+  options->parameter_tolerance = 1e-13;
+  options->gradient_tolerance = 0.0;
+  options->final_jtj = final_jtj;
 }
 
 cf_status cf_sphere_refine_silhouettes(const cf_silhouette_view *views, size_t num_views,
@@ -343,66 +358,42 @@ cf_status cf_sphere_refine_silhouettes(const cf_silhouette_view *views, size_t n
                         "a positive radius.",
                         center0[0], center0[1], center0[2], radius0);
 
-  double p[4] = {center0[0], center0[1], center0[2], radius0};
-  double jtj[16], jtr[4];
-  double cost = normal_equations(views, num_views, p, p[3], jtj, jtr);
-  double rcond = reciprocal_condition(jtj, 4);
-  if (rcond < RCOND_MIN)
-    return cf_error_set(err, CF_ENUMERIC,
-                        "The sphere fit's normal matrix is singular at the start (reciprocal "
-                        "condition number %.3g): the %zu silhouette views do not constrain the "
-                        "sphere's centre and radius (for example, they all see it from one place "
-                        "or along one line).",
-                        rcond, num_views);
+  double x[NUM_UNKNOWNS] = {center0[0], center0[1], center0[2], radius0};
+  const double lower[NUM_UNKNOWNS] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  const double upper[NUM_UNKNOWNS] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  sphere_problem data = {views, num_views};
+  cf_lsq_problem problem = {NUM_UNKNOWNS, x, lower, upper, 1, all_rays, all_unknowns, &data, NULL};
+  double jtj[NUM_UNKNOWNS * NUM_UNKNOWNS], cost;
+  double rcond = cf_lsq_normal_equations(&problem, 1, jtj, NULL, &cost) == CF_LSQ_EVALUATED
+                     ? reciprocal_condition(NUM_UNKNOWNS, jtj)
+                     : 0.0;
+  if (rcond < RCOND_MIN) return singular(err, "at the start", rcond, num_views);
 
-  double lambda = 1e-3;
-  int iterations = 0, converged = 0;
-  while (iterations < MAX_ITERATIONS && !converged) {
-    ++iterations;
-    double damped[16], rhs[4], step[4];
-    for (int k = 0; k < 16; ++k) damped[k] = jtj[k];
-    for (int k = 0; k < 4; ++k) {
-      damped[k * 4 + k] += lambda * (jtj[k * 4 + k] > 1e-300 ? jtj[k * 4 + k] : 1e-300);
-      rhs[k] = -jtr[k];
-    }
-    int solved = cholesky_solve(damped, rhs, 4, step);
-    double trial[4];
-    for (int k = 0; k < 4; ++k) trial[k] = p[k] + (solved ? step[k] : 0.0);
-    double trial_cost =
-        solved && trial[3] > 0.0 ? cost_at(views, num_views, trial, trial[3]) : INFINITY;
-    if (trial_cost < cost && isfinite(trial_cost)) {
-      double step_norm =
-          sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2] + step[3] * step[3]);
-      double scale = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) + p[3];
-      double decrease = cost - trial_cost;
-      for (int k = 0; k < 4; ++k) p[k] = trial[k];
-      cost = normal_equations(views, num_views, p, p[3], jtj, jtr);
-      lambda = fmax(lambda * 0.1, 1e-12);
-      if (step_norm <= 1e-13 * scale || decrease <= 1e-16 * cost) converged = 1;
-    } else {
-      lambda *= 10.0;
-      /* No step decreases the cost even when it is nearly a tiny gradient
-       * step: the cost is at its minimum to machine precision. */
-      if (lambda > 1e16) converged = 1;
-    }
+  cf_lsq_options options;
+  solve_options(&options, jtj);
+  cf_lsq_summary summary;
+  status = cf_lsq_solve(&problem, &options, &summary, err);
+  if (status != CF_OK) {
+    cf_error_prefix(err, "The sphere fit from %zu silhouette views", num_views);
+    return status;
   }
-  if (!converged)
+  if (!summary.converged)
     return cf_error_set(err, CF_ENUMERIC,
                         "The sphere fit did not converge in %d iterations (last centre %g %g %g, "
                         "radius %g).",
-                        MAX_ITERATIONS, p[0], p[1], p[2], p[3]);
-  if (!(p[3] > 0.0) || !isfinite(p[3]))
-    return cf_error_set(err, CF_ENUMERIC, "The sphere fit ended with radius %g.", p[3]);
-  rcond = reciprocal_condition(jtj, 4);
-  if (rcond < RCOND_MIN)
+                        summary.iterations, x[0], x[1], x[2], x[3]);
+  if (!(x[3] > 0.0) || !isfinite(x[3]))
+    return cf_error_set(err, CF_ENUMERIC, "The sphere fit ended with radius %g.", x[3]);
+  if (!summary.final_normal &&
+      cf_lsq_normal_equations(&problem, 1, jtj, NULL, &cost) != CF_LSQ_EVALUATED)
     return cf_error_set(err, CF_ENUMERIC,
-                        "The sphere fit's normal matrix is singular at the solution (reciprocal "
-                        "condition number %.3g): the %zu silhouette views do not constrain the "
-                        "sphere's centre and radius (for example, they all see it from one place "
-                        "or along one line).",
-                        rcond, num_views);
+                        "The sphere fit's cost is not finite at its solution (centre %g %g %g, "
+                        "radius %g).",
+                        x[0], x[1], x[2], x[3]);
+  rcond = reciprocal_condition(NUM_UNKNOWNS, jtj);
+  if (rcond < RCOND_MIN) return singular(err, "at the solution", rcond, num_views);
 
-  cf_sphere_fit result = {{p[0], p[1], p[2]}, p[3], 0.0, 0.0, iterations};
+  cf_sphere_fit result = {{x[0], x[1], x[2]}, x[3], 0.0, 0.0, summary.iterations};
   status = report_errors(views, num_views, &result, err);
   if (status != CF_OK) return status;
   *fit = result;

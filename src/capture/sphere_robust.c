@@ -8,27 +8,6 @@
 
 enum { MAX_ROUNDS = 20, MIN_RAYS = 5 };
 
-/* The angle between ray d from `origin` and the sphere's tangent cone,
- * in pixels. */
-static double deviation_px(const cf_silhouette_view *view, const double d_in[3],
-                           const cf_sphere_fit *fit) {
-  double to_centre[3], d[3];
-  double length = sqrt(d_in[0] * d_in[0] + d_in[1] * d_in[1] + d_in[2] * d_in[2]);
-  for (int k = 0; k < 3; ++k) {
-    to_centre[k] = fit->center[k] - view->origin[k];
-    d[k] = d_in[k] / length;
-  }
-  double along = to_centre[0] * d[0] + to_centre[1] * d[1] + to_centre[2] * d[2];
-  double c[3] = {to_centre[1] * d[2] - to_centre[2] * d[1],
-                 to_centre[2] * d[0] - to_centre[0] * d[2],
-                 to_centre[0] * d[1] - to_centre[1] * d[0]};
-  double across = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  double distance = sqrt(along * along + across * across);
-  double ray_angle = atan2(across, fabs(along)); /* a ray is a line: its sign is free */
-  double cone_angle = asin(fmin(1.0, fit->radius / distance));
-  return fabs(ray_angle - cone_angle) * view->focal_px;
-}
-
 static int compare_doubles(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);
@@ -53,7 +32,7 @@ cf_status cf_sphere_from_silhouettes_robust(const cf_silhouette_view *views, siz
     /* deviations from the current sphere, and the threshold */
     for (size_t v = 0, i = 0; v < num_views; ++v)
       for (size_t r = 0; r < views[v].count; ++r, ++i)
-        deviations[i] = sorted[i] = deviation_px(&views[v], views[v].rays + 3 * r, fit);
+        deviations[i] = sorted[i] = cf_sphere_ray_error_px(&views[v], views[v].rays + 3 * r, fit);
     qsort(sorted, total, sizeof *sorted, compare_doubles);
     double threshold = fmax(min_px, 2.5 * sorted[total / 2]);
     /* the kept rays of each view, views with too few dropped */

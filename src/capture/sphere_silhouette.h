@@ -109,8 +109,9 @@ typedef struct cf_sphere_fit {
 } cf_sphere_fit;
 
 /* Least squares over all rays of (distance(center, ray) − radius), by
- * Gauss-Newton/Levenberg-Marquardt from a closed-form start (the point
- * nearest to the views' central rays and the mean angular radius). Needs
+ * Levenberg-Marquardt through the least-squares layer (src/lsq, Ceres)
+ * from a closed-form start (the point nearest to the views' central rays
+ * and the mean angular radius). Needs
  * at least 2 views with 5 rays each; CF_ENUMERIC if the views do not
  * constrain the sphere (for example, all centres on one line with it).
  *
@@ -133,6 +134,13 @@ cf_status cf_sphere_from_silhouettes(const cf_silhouette_view *views, size_t num
 cf_status cf_sphere_refine_silhouettes(const cf_silhouette_view *views, size_t num_views,
                                        const double center0[3], double radius0, cf_sphere_fit *fit,
                                        cf_error *err);
+
+/* The angle between the line of `ray` (any length; its sign is ignored)
+ * from view->origin and the tangent cone of the sphere `fit` from there,
+ * times view->focal_px: how far, in pixels, the ray is off the sphere's
+ * outline (the error rms_px and max_px sum up). */
+double cf_sphere_ray_error_px(const cf_silhouette_view *view, const double ray[3],
+                              const cf_sphere_fit *fit);
 
 /* The least squares of cf_sphere_from_silhouettes made robust to parts of
  * an outline that are not the sphere's (its shadow on the background where

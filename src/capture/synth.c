@@ -1,5 +1,5 @@
 /* Synthetic captures (include/clayfit/synth.h): orbit cameras, the scene
- * rendered by MODEL.md's image formation with S×S samples per pixel near
+ * rendered by the image formation of docs/model.md §5 with S×S samples per pixel near
  * and on the sphere, photon and read noise, and everything a real capture
  * would have: images, a COLMAP model, a capture file (plus the truth). */
 #include "clayfit/synth.h"

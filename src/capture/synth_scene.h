@@ -33,7 +33,7 @@ typedef struct synth_scene {
 #define SYNTH_GROUND_Z (-1.0)
 
 /* Shade the ray origin + t d (d unit): the radiance it carries back, per
- * channel (MODEL.md: L = f E c_i, here with E = I/|p - x|²; the ground and
+ * channel (docs/model.md (5): L = f E c_i, here with E = I/|p - x|²; the ground and
  * the backdrop are Lambertian with a procedural albedo and are shadowed by
  * the sphere). Returns what the ray hit first. */
 synth_surface synth_shade(const synth_scene *scene, const double origin[3], const double d[3],

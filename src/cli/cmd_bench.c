@@ -108,6 +108,43 @@ static void bench_usage(FILE *out) {
           "passes lasting at least --min-time seconds (default 0.5) per case.\n");
 }
 
+/* Every model and mode timed: the table on stdout (or a line of progress
+ * on stderr with --json), the rows for the JSON. */
+static json_t *time_all(bench_data *d, long count, double min_time, int as_json,
+                        const cli_context *ctx) {
+  json_t *rows = json_array();
+  if (!as_json)
+    printf(
+        "clayfit bench eval: %ld observations, one thread, default parameters, "
+        "passes of at least %g s in all\n%-16s %-28s %14s %12s %16s\n",
+        count, min_time, "model", "mode", "median ns/eval", "best ns/eval", "median evals/s");
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
+    const cf_model_info *info = cf_model_info_get((cf_model_id)m);
+    double params[CF_MAX_DIM];
+    cf_model_default_params(info->id, params);
+    for (int mode = 0; mode < MODE_COUNT; ++mode) {
+      /* the table's rows show progress; with --json, a line on stderr */
+      if (as_json && !ctx->quiet)
+        fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
+      timing t = time_mode(d, info->id, params, (bench_mode)mode, min_time);
+      json_array_append_new(
+          rows,
+          json_pack("{s:s, s:s, s:s, s:f, s:f, s:f, s:i}", "code", info->code, "model", info->name,
+                    "mode", mode_names[mode], "median_ns_per_eval", t.median_ns, "best_ns_per_eval",
+                    t.best_ns, "median_evals_per_second", 1e9 / t.median_ns, "passes", t.passes));
+      if (!as_json) {
+        char label[32];
+        snprintf(label, sizeof label, "%s %s", info->code, info->name);
+        printf("%-16s %-28s %14.1f %12.1f %16.3e\n", label, mode_names[mode], t.median_ns,
+               t.best_ns, 1e9 / t.median_ns);
+        fflush(stdout);
+      }
+    }
+  }
+  if (as_json && !ctx->quiet) fprintf(stderr, "\r%60s\r", "");
+  return rows;
+}
+
 int cmd_bench(int argc, char **argv, cli_context *ctx) {
   if (argc > 1 && strcmp(argv[1], "fit") == 0) return cmd_bench_fit(argc - 1, argv + 1, ctx);
   static const struct option options[] = {{"count", required_argument, NULL, 'c'},
@@ -155,36 +192,7 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
     cli_report("bench", "out of memory for the observations");
     return CLI_EXIT_FAILURE;
   }
-  json_t *rows = json_array();
-  if (!as_json)
-    printf(
-        "clayfit bench eval: %ld observations, one thread, default parameters, "
-        "passes of at least %g s in all\n%-16s %-28s %14s %12s %16s\n",
-        count, min_time, "model", "mode", "median ns/eval", "best ns/eval", "median evals/s");
-  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
-    const cf_model_info *info = cf_model_info_get((cf_model_id)m);
-    double params[CF_MAX_DIM];
-    cf_model_default_params(info->id, params);
-    for (int mode = 0; mode < MODE_COUNT; ++mode) {
-      /* the table's rows show progress; with --json, a line on stderr */
-      if (as_json && !ctx->quiet)
-        fprintf(stderr, "\rbench eval: %s %-28s", info->code, mode_names[mode]);
-      timing t = time_mode(&d, info->id, params, (bench_mode)mode, min_time);
-      json_array_append_new(
-          rows,
-          json_pack("{s:s, s:s, s:s, s:f, s:f, s:f, s:i}", "code", info->code, "model", info->name,
-                    "mode", mode_names[mode], "median_ns_per_eval", t.median_ns, "best_ns_per_eval",
-                    t.best_ns, "median_evals_per_second", 1e9 / t.median_ns, "passes", t.passes));
-      if (!as_json) {
-        char label[32];
-        snprintf(label, sizeof label, "%s %s", info->code, info->name);
-        printf("%-16s %-28s %14.1f %12.1f %16.3e\n", label, mode_names[mode], t.median_ns,
-               t.best_ns, 1e9 / t.median_ns);
-        fflush(stdout);
-      }
-    }
-  }
-  if (as_json && !ctx->quiet) fprintf(stderr, "\r%60s\r", "");
+  json_t *rows = time_all(&d, count, min_time, as_json, ctx);
   bench_data_free(&d);
   if (as_json)
     return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval", "observations",

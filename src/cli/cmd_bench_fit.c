@@ -265,84 +265,106 @@ static cf_status render(const char *work, cf_model_id model, int images, int wid
   return CF_OK;
 }
 
-int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
+/* ---- the command line ---- */
+
+typedef struct bench_args {
+  const char *sizes, *work, *json_path, *model_text;
+  const char *given[MAX_CAPTURES];
+  int given_count;
+  double budgets[MAX_BUDGETS];
+  int budget_count;
+} bench_args;
+
+/* --budgets: a list of at most MAX_BUDGETS numbers of observations. */
+static cf_status parse_budgets(const char *text, bench_args *a, cf_error *err) {
+  a->budget_count = 1;
+  for (const char *p = text; *p; ++p) a->budget_count += *p == ',';
+  cf_status s;
+  if (a->budget_count > MAX_BUDGETS)
+    s = cf_error_set(err, CF_EINVAL, "--budgets: at most %d", MAX_BUDGETS);
+  else
+    s = cli_parse_list(text, "--budgets", a->budget_count, a->budgets, err);
+  for (int i = 0; s == CF_OK && i < a->budget_count; ++i)
+    if (!(a->budgets[i] >= 100 && a->budgets[i] <= 1e9))
+      s = cf_error_set(err, CF_ERANGE, "--budgets: %g is outside [100, 1e9]", a->budgets[i]);
+  return s;
+}
+
+/* The command line into a. Returns -1 to go on, else the exit status
+ * (--help, a bad option); other errors are left in *s and err. */
+static int parse_bench_args(int argc, char **argv, bench_args *a, cf_status *s, cf_error *err) {
   static const struct option options[] = {
       {"sizes", required_argument, NULL, 's'}, {"capture", required_argument, NULL, 'c'},
       {"model", required_argument, NULL, 'm'}, {"budgets", required_argument, NULL, 'b'},
       {"work", required_argument, NULL, 'w'},  {"json", required_argument, NULL, 'j'},
       {"help", no_argument, NULL, 'h'},        {0}};
-  const char *sizes = "2x240x180,8x320x240,16x480x360", *work = "out/bench", *json_path = NULL;
-  const char *given[MAX_CAPTURES], *model_text = NULL;
-  int given_count = 0;
-  double budgets[MAX_BUDGETS] = {100000, 30000, 10000};
-  int budget_count = 3;
-  cf_error err = {0};
-  cf_status s = CF_OK;
+  *a = (bench_args){.sizes = "2x240x180,8x320x240,16x480x360",
+                    .work = "out/bench",
+                    .budgets = {100000, 30000, 10000},
+                    .budget_count = 3};
   optind = 1;
   opterr = 0;
-  for (int c; s == CF_OK && (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
+  for (int c; *s == CF_OK && (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
     if (c == 's')
-      sizes = optarg;
-    else if (c == 'c' && given_count < MAX_CAPTURES)
-      given[given_count++] = optarg;
+      a->sizes = optarg;
+    else if (c == 'c' && a->given_count < MAX_CAPTURES)
+      a->given[a->given_count++] = optarg;
     else if (c == 'm')
-      model_text = optarg;
+      a->model_text = optarg;
     else if (c == 'w')
-      work = optarg;
+      a->work = optarg;
     else if (c == 'j')
-      json_path = optarg;
-    else if (c == 'b') {
-      budget_count = 1;
-      for (const char *p = optarg; *p; ++p) budget_count += *p == ',';
-      if (budget_count > MAX_BUDGETS)
-        s = cf_error_set(&err, CF_EINVAL, "--budgets: at most %d", MAX_BUDGETS);
-      else
-        s = cli_parse_list(optarg, "--budgets", budget_count, budgets, &err);
-      for (int i = 0; s == CF_OK && i < budget_count; ++i)
-        if (!(budgets[i] >= 100 && budgets[i] <= 1e9))
-          s = cf_error_set(&err, CF_ERANGE, "--budgets: %g is outside [100, 1e9]", budgets[i]);
-    } else if (c == 'h') {
+      a->json_path = optarg;
+    else if (c == 'b')
+      *s = parse_budgets(optarg, a, err);
+    else if (c == 'h') {
       usage(stdout);
       return CLI_EXIT_OK;
     } else
       return cli_bad_option("bench", argv);
   }
-  cf_model_id forced = CF_MODEL_CLAY;
-  if (s == CF_OK && model_text) s = cf_model_find(model_text, &forced, &err);
-  if (s == CF_OK && optind != argc)
-    s = cf_error_set(&err, CF_EINVAL, "unexpected argument '%s'", argv[optind]);
-  if (s == CF_OK) s = cf_make_dirs(work, &err);
-  bench_capture captures[MAX_CAPTURES];
-  int count = 0;
-  for (const char *p = sizes; s == CF_OK && *p && count < MAX_CAPTURES;) {
+  if (*s == CF_OK && optind != argc)
+    *s = cf_error_set(err, CF_EINVAL, "unexpected argument '%s'", argv[optind]);
+  return -1;
+}
+
+/* The synthetic captures of --sizes (rendered unless an earlier run did),
+ * then those given, each fitted with model. */
+static cf_status prepare_captures(const bench_args *a, cf_model_id model, const cli_context *ctx,
+                                  bench_capture *captures, int *count, cf_error *err) {
+  cf_status s = cf_make_dirs(a->work, err);
+  *count = 0;
+  for (const char *p = a->sizes; s == CF_OK && *p && *count < MAX_CAPTURES;) {
     int images, width, height, used = 0;
     if (sscanf(p, "%dx%dx%d%n", &images, &width, &height, &used) != 3 || images < 1 ||
-        images > 64 || width < 32 || height < 32 || width > 4096 || height > 4096) {
-      s = cf_error_set(&err, CF_EINVAL, "--sizes: '%s' is not IMAGESxWIDTHxHEIGHT[,...]", p);
-      break;
-    }
+        images > 64 || width < 32 || height < 32 || width > 4096 || height > 4096)
+      return cf_error_set(err, CF_EINVAL, "--sizes: '%s' is not IMAGESxWIDTHxHEIGHT[,...]", p);
     if (!ctx->quiet) fprintf(stderr, "clayfit bench: rendering %dx%dx%d\n", images, width, height);
-    s = render(work, forced, images, width, height, &captures[count], &err);
-    captures[count++].model = forced;
+    s = render(a->work, model, images, width, height, &captures[*count], err);
+    captures[(*count)++].model = model;
     p += used;
     if (*p == ',') ++p;
   }
-  for (int i = 0; s == CF_OK && i < given_count && count < MAX_CAPTURES; ++i, ++count) {
-    snprintf(captures[count].path, sizeof captures[count].path, "%s", given[i]);
-    snprintf(captures[count].name, sizeof captures[count].name, "%s", given[i]);
-    captures[count].model = forced;
+  for (int i = 0; s == CF_OK && i < a->given_count && *count < MAX_CAPTURES; ++i, ++*count) {
+    bench_capture *bc = &captures[*count];
+    snprintf(bc->path, sizeof bc->path, "%s", a->given[i]);
+    snprintf(bc->name, sizeof bc->name, "%s", a->given[i]);
+    bc->model = model;
   }
-  if (s != CF_OK) {
-    cli_report("bench", err.message);
-    return CLI_EXIT_USAGE;
-  }
-  for (int i = 0; i < count; ++i) read_truth(&captures[i]);
+  return s;
+}
 
-  run runs[MAX_RUNS];
+/* ---- the runs ---- */
+
+/* Every run: each capture with all its observations, then with each
+ * budget below its count drawn by each sampling. Returns the number of
+ * runs, or -1 when a fit on every observation failed (reported). */
+static int run_all(bench_capture *captures, int count, const bench_args *a, const cli_context *ctx,
+                   run *runs) {
   int n = 0;
   for (int i = 0; i < count; ++i) {
-    for (int b = -1; b < budget_count; ++b) {
-      size_t budget = b < 0 ? 0 : (size_t)budgets[b];
+    for (int b = -1; b < a->budget_count; ++b) {
+      size_t budget = b < 0 ? 0 : (size_t)a->budgets[b];
       if (budget && budget >= captures[i].observations) continue;
       for (int k = 0; k < (budget ? CF_SAMPLING_COUNT : 1) && n < MAX_RUNS; ++k) {
         run *r = &runs[n++];
@@ -357,14 +379,23 @@ int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
         if (run_child(&captures[i], r) != 0) r->f.ok = 0;
         if (b < 0 && !r->f.ok) {
           cli_report("bench", r->f.message);
-          return CLI_EXIT_USAGE;
+          return -1;
         }
         if (b < 0) captures[i].observations = r->observations = r->f.observations;
       }
     }
   }
-  mark_pareto(runs, n);
+  return n;
+}
 
+/* ---- the figures ---- */
+
+static json_t *number_or_null(double x) {
+  return isfinite(x) ? json_real(x) : json_null();
+}
+
+/* The table of runs on stdout; their rows for the JSON file. */
+static json_t *print_runs(const run *runs, int n, const bench_capture *captures, int count) {
   printf("clayfit bench fit: %d captures, %d runs (each a process; wall time includes loading)\n",
          count, n);
   printf("%-24s %9s %8s %-10s %8s %9s %11s %12s %9s %6s %s\n", "capture", "observ.", "budget",
@@ -388,11 +419,15 @@ int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
                         bc->name, "model", cf_model_info_get(bc->model)->code, "observations",
                         (json_int_t)r->observations, "budget", (json_int_t)r->budget, "sampling",
                         sampling, "seconds", r->f.seconds, "peak_mb", r->peak_mb, "relative_rmse",
-                        r->f.relative_rmse, "worst_error",
-                        isfinite(r->f.worst_error) ? json_real(r->f.worst_error) : json_null(),
+                        r->f.relative_rmse, "worst_error", number_or_null(r->f.worst_error),
                         "solve_seconds", r->f.solve_seconds, "iterations", r->f.iterations,
                         "pareto", r->pareto));
   }
+  return rows;
+}
+
+/* The evaluator's floor of each fit on every observation. */
+static json_t *print_floors(const run *runs, int n, const bench_capture *captures) {
   printf(
       "\nthe evaluator's floor (one value+gradient pass over every observation x the "
       "iterations of the fit on all of them):\n");
@@ -411,41 +446,68 @@ int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
                           "pass_seconds", r->f.floor_seconds, "iterations", r->f.iterations,
                           "floor_seconds", floor, "solve_seconds", r->f.solve_seconds));
   }
+  return floors;
+}
+
+/* The memory per observation between the smallest and the largest
+ * capture's fits on every observation. */
+static double bytes_per_observation(const run *runs, int n) {
+  int lo = -1, hi = -1;
+  for (int i = 0; i < n; ++i) {
+    if (runs[i].budget || !runs[i].f.ok) continue;
+    if (lo < 0 || runs[i].observations < runs[lo].observations) lo = i;
+    if (hi < 0 || runs[i].observations > runs[hi].observations) hi = i;
+  }
+  if (lo < 0 || hi < 0 || runs[hi].observations <= runs[lo].observations) return NAN;
+  return (runs[hi].peak_mb - runs[lo].peak_mb) * 1048576.0 /
+         (double)(runs[hi].observations - runs[lo].observations);
+}
+
+/* The scaling on stdout, as the JSON file's "scaling". */
+static json_t *print_scaling(const run *runs, int n) {
   double time_exponent = scaling_exponent(runs, n, 0),
          memory_exponent = scaling_exponent(runs, n, 1);
   printf("\nscaling (all observations): time ~ n^%.2f, peak memory ~ n^%.2f", time_exponent,
          memory_exponent);
-  double per_observation = NAN;
-  for (int i = 0, lo = -1, hi = -1; i <= n; ++i) {
-    if (i < n && (runs[i].budget || !runs[i].f.ok)) continue;
-    if (i < n) {
-      if (lo < 0 || runs[i].observations < runs[lo].observations) lo = i;
-      if (hi < 0 || runs[i].observations > runs[hi].observations) hi = i;
-      continue;
-    }
-    if (lo >= 0 && hi >= 0 && runs[hi].observations > runs[lo].observations)
-      per_observation = (runs[hi].peak_mb - runs[lo].peak_mb) * 1048576.0 /
-                        (double)(runs[hi].observations - runs[lo].observations);
-  }
+  double per_observation = bytes_per_observation(runs, n);
   printf("; memory per observation %.0f bytes (between the smallest and the largest capture)\n",
          per_observation);
-  if (json_path) {
-    json_t *doc = json_pack("{s:s, s:o, s:o, s:{s:o, s:o, s:o}}", "benchmark", "clayfit bench fit",
-                            "runs", rows, "floor", floors, "scaling", "time_exponent",
-                            isfinite(time_exponent) ? json_real(time_exponent) : json_null(),
-                            "memory_exponent",
-                            isfinite(memory_exponent) ? json_real(memory_exponent) : json_null(),
-                            "bytes_per_observation",
-                            isfinite(per_observation) ? json_real(per_observation) : json_null());
-    int failed = !doc || json_dump_file(doc, json_path, JSON_INDENT(2)) != 0;
-    json_decref(doc);
-    if (failed) {
-      cli_report("bench", "could not write the JSON file");
-      return CLI_EXIT_FAILURE;
-    }
-  } else {
-    json_decref(rows);
-    json_decref(floors);
+  return json_pack("{s:o, s:o, s:o}", "time_exponent", number_or_null(time_exponent),
+                   "memory_exponent", number_or_null(memory_exponent), "bytes_per_observation",
+                   number_or_null(per_observation));
+}
+
+int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
+  bench_args a;
+  cf_error err = {0};
+  cf_status s = CF_OK;
+  int exit_status = parse_bench_args(argc, argv, &a, &s, &err);
+  if (exit_status >= 0) return exit_status;
+  cf_model_id forced = CF_MODEL_CLAY;
+  if (s == CF_OK && a.model_text) s = cf_model_find(a.model_text, &forced, &err);
+  bench_capture captures[MAX_CAPTURES];
+  int count = 0;
+  if (s == CF_OK) s = prepare_captures(&a, forced, ctx, captures, &count, &err);
+  if (s != CF_OK) {
+    cli_report("bench", err.message);
+    return CLI_EXIT_USAGE;
+  }
+  for (int i = 0; i < count; ++i) read_truth(&captures[i]);
+
+  run runs[MAX_RUNS];
+  int n = run_all(captures, count, &a, ctx, runs);
+  if (n < 0) return CLI_EXIT_USAGE;
+  mark_pareto(runs, n);
+  json_t *rows = print_runs(runs, n, captures, count);
+  json_t *floors = print_floors(runs, n, captures);
+  json_t *scaling = print_scaling(runs, n);
+  json_t *doc = json_pack("{s:s, s:o, s:o, s:o}", "benchmark", "clayfit bench fit", "runs", rows,
+                          "floor", floors, "scaling", scaling);
+  int failed = a.json_path && (!doc || json_dump_file(doc, a.json_path, JSON_INDENT(2)) != 0);
+  json_decref(doc);
+  if (failed) {
+    cli_report("bench", "could not write the JSON file");
+    return CLI_EXIT_FAILURE;
   }
   return CLI_EXIT_OK;
 }

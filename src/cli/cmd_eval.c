@@ -59,8 +59,15 @@ static json_t *gradient_json(const cf_model_info *m, const double *grad) {
   return object;
 }
 
-int cmd_eval(int argc, char **argv, cli_context *ctx) {
-  (void)ctx;
+typedef struct eval_args {
+  const char *model_text, *light_text, *view_text, *normal_text, *preset;
+  const char *assignments[MAX_PARAM_ASSIGNMENTS];
+  int assignment_count, want_grad;
+} eval_args;
+
+/* The command line into a. Returns -1 to go on, else the exit status (after
+ * the usage, or the reason on stderr). */
+static int parse_eval_args(int argc, char **argv, eval_args *a) {
   enum {
     OPT_MODEL = 'm',
     OPT_PARAM = 'p',
@@ -80,75 +87,84 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
                                           {"preset", required_argument, NULL, OPT_PRESET},
                                           {"help", no_argument, NULL, OPT_HELP},
                                           {0}};
-  const char *model_text = NULL, *light_text = NULL, *view_text = NULL, *preset = NULL;
-  const char *normal_text = "0,0,1";
-  const char *assignments[MAX_PARAM_ASSIGNMENTS];
-  int assignment_count = 0, want_grad = 0;
+  memset(a, 0, sizeof *a);
+  a->normal_text = "0,0,1";
   optind = 1;
   opterr = 0;
   for (int c; (c = getopt_long(argc, argv, "", options, NULL)) != -1;) {
-    switch (c) {
-      case OPT_MODEL:
-        model_text = optarg;
-        break;
-      case OPT_LIGHT:
-        light_text = optarg;
-        break;
-      case OPT_VIEW:
-        view_text = optarg;
-        break;
-      case OPT_NORMAL:
-        normal_text = optarg;
-        break;
-      case OPT_GRAD:
-        want_grad = 1;
-        break;
-      case OPT_PRESET:
-        preset = optarg;
-        break;
-      case OPT_PARAM:
-        if (assignment_count == MAX_PARAM_ASSIGNMENTS) {
-          cli_report("eval", "too many --param options");
-          return CLI_EXIT_USAGE;
-        }
-        assignments[assignment_count++] = optarg;
-        break;
-      case OPT_HELP:
-        eval_usage(stdout);
-        return CLI_EXIT_OK;
-      default:
-        return cli_bad_option("eval", argv);
-    }
+    if (c == OPT_MODEL)
+      a->model_text = optarg;
+    else if (c == OPT_LIGHT)
+      a->light_text = optarg;
+    else if (c == OPT_VIEW)
+      a->view_text = optarg;
+    else if (c == OPT_NORMAL)
+      a->normal_text = optarg;
+    else if (c == OPT_GRAD)
+      a->want_grad = 1;
+    else if (c == OPT_PRESET)
+      a->preset = optarg;
+    else if (c == OPT_PARAM && a->assignment_count == MAX_PARAM_ASSIGNMENTS) {
+      cli_report("eval", "too many --param options");
+      return CLI_EXIT_USAGE;
+    } else if (c == OPT_PARAM)
+      a->assignments[a->assignment_count++] = optarg;
+    else if (c == OPT_HELP) {
+      eval_usage(stdout);
+      return CLI_EXIT_OK;
+    } else
+      return cli_bad_option("eval", argv);
   }
+  return -1;
+}
+
+/* What the options must say together. Returns -1 if they do, else the
+ * exit status with the reason on stderr. */
+static int check_eval_args(int argc, char **argv, const eval_args *a) {
   if (optind < argc) {
     char message[160];
     snprintf(message, sizeof message, "unexpected argument '%s'", argv[optind]);
     cli_report("eval", message);
     return CLI_EXIT_USAGE;
   }
-  if ((!model_text && !preset) || !light_text || !view_text) {
+  if ((!a->model_text && !a->preset) || !a->light_text || !a->view_text) {
     cli_report("eval", "--model, --light and --view are required (see clayfit eval --help)");
     return CLI_EXIT_USAGE;
   }
-  if (model_text && preset) {
+  if (a->model_text && a->preset) {
     cli_report("eval", "--model and --preset exclude each other (the preset names its model)");
     return CLI_EXIT_USAGE;
   }
+  return -1;
+}
 
+/* The model and its parameters (the preset's or the defaults, then
+ * --param), and the directions. */
+static cf_status eval_inputs(const eval_args *a, cf_model_id *model, double *params, double n[3],
+                             double l[3], double v[3], cf_error *err) {
+  int given[CF_MAX_DIM] = {0};
+  cf_status s = a->preset ? cf_export_preset_read(a->preset, model, params, err)
+                          : cf_model_find(a->model_text, model, err);
+  if (s == CF_OK && !a->preset) cf_model_default_params(*model, params);
+  for (int k = 0; s == CF_OK && k < a->assignment_count; ++k)
+    s = cli_apply_param(*model, "--param", a->assignments[k], params, given, err);
+  if (s == CF_OK) s = cf_params_check(*model, params, err);
+  if (s == CF_OK) s = cli_parse_direction(a->light_text, "--light", l, err);
+  if (s == CF_OK) s = cli_parse_direction(a->view_text, "--view", v, err);
+  if (s == CF_OK) s = cli_parse_direction(a->normal_text, "--normal", n, err);
+  return s;
+}
+
+int cmd_eval(int argc, char **argv, cli_context *ctx) {
+  (void)ctx;
+  eval_args a;
+  int exit_status = parse_eval_args(argc, argv, &a);
+  if (exit_status < 0) exit_status = check_eval_args(argc, argv, &a);
+  if (exit_status >= 0) return exit_status;
   cf_error err = {0};
   cf_model_id model;
-  double params[CF_MAX_DIM];
-  int given[CF_MAX_DIM] = {0};
-  double n[3], l[3], v[3];
-  cf_status s = preset ? cf_export_preset_read(preset, &model, params, &err)
-                       : cf_model_find(model_text, &model, &err);
-  if (s == CF_OK && !preset) cf_model_default_params(model, params);
-  for (int k = 0; s == CF_OK && k < assignment_count; ++k)
-    s = cli_apply_param(model, "--param", assignments[k], params, given, &err);
-  if (s == CF_OK) s = cf_params_check(model, params, &err);
-  if (s == CF_OK) s = cli_parse_direction(light_text, "--light", l, &err);
-  if (s == CF_OK) s = cli_parse_direction(view_text, "--view", v, &err);
-  if (s == CF_OK) s = cli_parse_direction(normal_text, "--normal", n, &err);
+  double params[CF_MAX_DIM], n[3], l[3], v[3];
+  cf_status s = eval_inputs(&a, &model, params, n, l, v, &err);
   if (s != CF_OK) {
     cli_report("eval", err.message);
     return CLI_EXIT_USAGE;
@@ -156,7 +172,7 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
 
   const cf_model_info *m = cf_model_info_get(model);
   double f[3], grad[3 * CF_MAX_DIM];
-  cf_eval(model, params, n, l, v, f, want_grad ? grad : NULL);
+  cf_eval(model, params, n, l, v, f, a.want_grad ? grad : NULL);
   cf_geometry g = cf_geometry_from_directions(n, l, v);
 
   json_t *doc = json_object();
@@ -172,6 +188,6 @@ int cmd_eval(int argc, char **argv, cli_context *ctx) {
   json_object_set_new(doc, "lit", json_boolean(cf_geometry_is_lit(&g)));
   json_object_set_new(doc, "params", params_json(m, params));
   json_object_set_new(doc, "value", json_doubles(f, 3));
-  if (want_grad) json_object_set_new(doc, "gradient", gradient_json(m, grad));
+  if (a.want_grad) json_object_set_new(doc, "gradient", gradient_json(m, grad));
   return json_print(stdout, doc) ? CLI_EXIT_FAILURE : CLI_EXIT_OK;
 }

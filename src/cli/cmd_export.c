@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "clayfit/export.h"
-#include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "cli.h"
 
 static void export_usage(FILE *out) {

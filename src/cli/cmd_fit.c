@@ -8,10 +8,10 @@
 #include "args.h"
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "cli.h"
 #include "core/clock.h"
 #include "core/file.h"
-#include "fit/fit_json.h"
 
 enum { MAX_ASSIGNMENTS = 64 };
 
@@ -22,7 +22,7 @@ static void fit_usage(FILE *out) {
           "                   [--fit-exposures] [--no-multistart] [--density D]\n"
           "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
           "                   [--budget N|all] [--sampling uniform|stratified|importance]\n"
-          "                   [--max-iterations N] [--threads N]\n\n"
+          "                   [--max-iterations N] [--threads N] [--trace]\n\n"
           "Fits the model to the capture's observations and writes OUTDIR/fit.json\n"
           "(data_schema/fit.schema.json): parameters with units, standard deviations and\n"
           "correlations, what was held and why, the model choice, residual statistics\n"
@@ -40,7 +40,7 @@ static void fit_usage(FILE *out) {
           "  --fit-exposures     fit each image's exposure (their mean log stays 0)\n"
           "  --no-multistart     start from the closed-form albedo and defaults only\n"
           "  --density D         the film's known thickness, for density and absorption\n"
-          "                      (default: MODEL.md's convention, mean absorption 0.8)\n"
+          "                      (default: mean absorption 0.8, docs/model.md §3.6)\n"
           "  --footprint F       pixel footprints: auto (default) integrates a pixel with\n"
           "                      S x S Gauss-Legendre samples where a lobe is narrower\n"
           "                      than the pixel;\n"
@@ -57,14 +57,16 @@ static void fit_usage(FILE *out) {
           "                      residual statistics in fit.json estimates for every\n"
           "                      observation (clayfit report evaluates each one)\n"
           "  --max-iterations N  per solve (default 100)\n"
+          "  --trace             every iteration of every solve on stderr, with the\n"
+          "                      solver's decisions around it (to study convergence)\n"
           "  --threads N         solver threads (default 2)\n");
 }
 
 /* --hold and --free into one model's options. With known (the model
  * choice: one flag per hold, then per free), a name the model lacks is
  * skipped and the flags mark the names some model has. */
-static cf_status apply_holds(cf_fit_options *o, const char **holds, int hold_count,
-                             const char **frees, int free_count, int *known, cf_error *err) {
+static cf_status apply_holds(cf_fit_options *o, const char *const *holds, int hold_count,
+                             const char *const *frees, int free_count, int *known, cf_error *err) {
   int given[CF_MAX_DIM] = {0};
   cf_status s = CF_OK;
   for (int i = 0; s == CF_OK && i < hold_count; ++i) {
@@ -104,8 +106,8 @@ typedef struct fit_settings {
   cf_sampling sampling;
 } fit_settings;
 
-static cf_status model_options(cf_model_id model, const fit_settings *set, const char **holds,
-                               int hold_count, const char **frees, int free_count, int *known,
+static cf_status model_options(cf_model_id model, const fit_settings *set, const char *const *holds,
+                               int hold_count, const char *const *frees, int free_count, int *known,
                                cf_fit_options *o, cf_error *err) {
   cf_fit_default_options(o, model);
   o->loss = set->loss;
@@ -125,8 +127,8 @@ static cf_status model_options(cf_model_id model, const fit_settings *set, const
 /* The options of every model of the ladder (--model auto): a --hold or
  * --free applies to the models that have the parameter, and must name one
  * that some model has. */
-static cf_status ladder_options(const fit_settings *set, const char **holds, int hold_count,
-                                const char **frees, int free_count,
+static cf_status ladder_options(const fit_settings *set, const char *const *holds, int hold_count,
+                                const char *const *frees, int free_count,
                                 cf_fit_options options[CF_MODEL_COUNT], cf_error *err) {
   int known[2 * MAX_ASSIGNMENTS] = {0};
   cf_status s = CF_OK;
@@ -162,6 +164,38 @@ static void print_choice(const cf_fit_choice *choice) {
   }
 }
 
+/* A value and its standard deviation; at a bound of its range the sd is
+ * not defined (the data prefer a value at or beyond the bound: fit.json
+ * has null there), so the bound is named instead. */
+static void print_value(double value, double sd, int at_bound, double lower, double upper) {
+  if (at_bound)
+    printf(" %.6g (at %s bound)", value,
+           fabs(value - lower) <= fabs(value - upper) ? "lower" : "upper");
+  else if (isfinite(sd))
+    printf(" %.6g ± %.2g", value, sd);
+  else
+    printf(" %.6g (sd undefined)", value);
+}
+
+static void print_params(const cf_fit_result *r) {
+  const cf_model_info *m = cf_model_info_get(r->model);
+  for (int j = 0; j < m->param_count; ++j) {
+    const cf_param_info *info = cf_param_info_get(m->params[j]);
+    int k = m->offsets[j];
+    printf("  %-18s", info->name);
+    for (int c = 0; c < info->components; ++c)
+      print_value(r->params[k + c], r->sd[k + c], r->status[k + c] == CF_PARAM_AT_BOUND,
+                  info->lower, info->upper);
+    printf("  %s", strcmp(info->unit, "1") ? info->unit : "");
+    for (int c = 0; c < info->components; ++c)
+      if (r->status[k + c] != CF_PARAM_FITTED && r->status[k + c] != CF_PARAM_AT_BOUND) {
+        printf("  (%s)", cf_param_status_name(r->status[k + c]));
+        break;
+      }
+    printf("\n");
+  }
+}
+
 static void print_summary(const cf_fit_result *r, const char *path) {
   const cf_model_info *m = cf_model_info_get(r->model);
   printf(
@@ -179,221 +213,300 @@ static void print_summary(const cf_fit_result *r, const char *path) {
       "inside them: %.4g %% over %zu residuals\n",
       CF_FIT_CORE_RADIUS_PX, 100.0 * r->rest_relative_rmse, 100.0 * r->core_relative_rmse,
       r->core_residuals);
-  for (int j = 0; j < m->param_count; ++j) {
-    const cf_param_info *info = cf_param_info_get(m->params[j]);
-    int k = m->offsets[j];
-    printf("  %-18s", info->name);
-    for (int c = 0; c < info->components; ++c)
-      printf(" %.6g ± %.2g", r->params[k + c], r->sd[k + c]);
-    printf("  %s", strcmp(info->unit, "1") ? info->unit : "");
-    for (int c = 0; c < info->components; ++c)
-      if (r->status[k + c] != CF_PARAM_FITTED) {
-        printf("  (%s)", cf_param_status_name(r->status[k + c]));
-        break;
-      }
+  print_params(r);
+  if (r->scale_fitted) {
+    printf("  %-18s", "scale");
+    print_value(r->scale, r->scale_sd, 0, 0.0, 0.0);
     printf("\n");
   }
-  if (r->scale_fitted) printf("  %-18s %.6g ± %.2g\n", "scale", r->scale, r->scale_sd);
-  if (r->response_fitted)
-    printf("  %-18s %.6g ± %.2g  (the photos' unknown tone curve)\n", "response exponent",
-           r->response, r->response_sd);
+  if (r->response_fitted) {
+    printf("  %-18s", "response exponent");
+    print_value(r->response, r->response_sd, 0, 0.0, 0.0);
+    printf("  (the photos' unknown tone curve)\n");
+  }
   printf("written: %s\n", path);
 }
 
-int cmd_fit(int argc, char **argv, cli_context *ctx) {
-  static const struct option options[] = {{"output", required_argument, NULL, 'o'},
-                                          {"model", required_argument, NULL, 'm'},
-                                          {"hold", required_argument, NULL, 'H'},
-                                          {"free", required_argument, NULL, 'F'},
-                                          {"loss", required_argument, NULL, 'l'},
-                                          {"loss-scale", required_argument, NULL, 'k'},
-                                          {"fit-exposures", no_argument, NULL, 'e'},
-                                          {"no-multistart", no_argument, NULL, 'M'},
-                                          {"density", required_argument, NULL, 'd'},
-                                          {"max-iterations", required_argument, NULL, 'i'},
-                                          {"threads", required_argument, NULL, 't'},
-                                          {"help", no_argument, NULL, 'h'},
-                                          {"footprint", required_argument, NULL, 'f'},
-                                          {"footprint-tolerance", required_argument, NULL, 'T'},
-                                          {"budget", required_argument, NULL, 'B'},
-                                          {"sampling", required_argument, NULL, 'S'},
-                                          {0}};
-  const char *out_dir = NULL, *model_text = "auto";
+/* ---- the command line ---- */
+
+typedef struct fit_command {
+  const char *capture_path, *out_dir, *model_text;
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
-  int hold_count = 0, free_count = 0;
+  int hold_count, free_count;
+  int trace; /* --trace: the solver's lines on stderr */
+  fit_settings set;
+} fit_command;
+
+static cf_status parse_loss(const char *text, cf_loss *loss, cf_error *err) {
+  if (strcmp(text, "huber") == 0)
+    *loss = CF_LOSS_HUBER;
+  else if (strcmp(text, "cauchy") == 0)
+    *loss = CF_LOSS_CAUCHY;
+  else if (strcmp(text, "none") == 0)
+    *loss = CF_LOSS_NONE;
+  else
+    return cf_error_set(err, CF_EINVAL, "--loss: '%s' is not huber, cauchy or none", text);
+  return CF_OK;
+}
+
+/* --footprint: auto (0), centre (1) or S samples per side. */
+static cf_status parse_footprint(const char *text, int *footprint, cf_error *err) {
+  if (strcmp(text, "auto") == 0) {
+    *footprint = 0;
+    return CF_OK;
+  }
+  if (strcmp(text, "centre") == 0 || strcmp(text, "center") == 0) {
+    *footprint = 1;
+    return CF_OK;
+  }
+  long samples = 0;
+  cf_status s =
+      cli_parse_count(text, "--footprint", 1, CF_FIT_FOOTPRINT_MAX_SAMPLES, &samples, err);
+  if (s != CF_OK)
+    s = cf_error_set(err, CF_EINVAL,
+                     "--footprint: '%s' is not auto, centre or a number of samples per side "
+                     "from 1 to %d",
+                     text, CF_FIT_FOOTPRINT_MAX_SAMPLES);
+  *footprint = (int)samples;
+  return s;
+}
+
+/* --budget: a number of observations, or all (0). */
+static cf_status parse_budget(const char *text, size_t *budget, cf_error *err) {
+  long n = 0;
+  cf_status s = CF_OK;
+  if (strcmp(text, "all") != 0 &&
+      cli_parse_count(text, "--budget", 100, 2000000000L, &n, err) != CF_OK)
+    s = cf_error_set(err, CF_EINVAL,
+                     "--budget: '%s' is neither a number of observations (100 to 2e9) nor all",
+                     text);
+  *budget = (size_t)n;
+  return s;
+}
+
+static cf_status parse_sampling(const char *text, cf_sampling *sampling, cf_error *err) {
+  for (int k = 0; k < CF_SAMPLING_COUNT; ++k)
+    if (strcmp(text, cf_sampling_name((cf_sampling)k)) == 0) {
+      *sampling = (cf_sampling)k;
+      return CF_OK;
+    }
+  return cf_error_set(err, CF_EINVAL, "--sampling: '%s' is not uniform, stratified or importance",
+                      text);
+}
+
+/* A positive number (--loss-scale, --density). */
+static cf_status parse_positive(const char *text, const char *flag, double *out, cf_error *err) {
+  cf_status s = cli_parse_number(text, flag, out, err);
+  if (s == CF_OK && !(*out > 0.0))
+    s = cf_error_set(err, CF_ERANGE, "%s must be greater than 0", flag);
+  return s;
+}
+
+/* One option with a value into the settings. */
+static cf_status parse_setting(int c, const char *arg, fit_settings *set, cf_error *err) {
+  long count = 0;
+  cf_status s = CF_OK;
+  switch (c) {
+    case 'l':
+      return parse_loss(arg, &set->loss, err);
+    case 'k':
+      return parse_positive(arg, "--loss-scale", &set->loss_scale, err);
+    case 'd':
+      return parse_positive(arg, "--density", &set->density, err);
+    case 'f':
+      return parse_footprint(arg, &set->footprint, err);
+    case 'B':
+      return parse_budget(arg, &set->budget, err);
+    case 'S':
+      return parse_sampling(arg, &set->sampling, err);
+    case 'T':
+      s = cli_parse_number(arg, "--footprint-tolerance", &set->footprint_tolerance, err);
+      if (s == CF_OK && !(set->footprint_tolerance > 0.0 && set->footprint_tolerance < 1.0))
+        s = cf_error_set(err, CF_ERANGE, "--footprint-tolerance must be in (0, 1)");
+      return s;
+    case 'i':
+      s = cli_parse_count(arg, "--max-iterations", 1, 100000, &count, err);
+      if (s == CF_OK) set->max_iterations = (int)count;
+      return s;
+    case 't':
+      s = cli_parse_count(arg, "--threads", 1, 256, &count, err);
+      if (s == CF_OK) set->threads = (int)count;
+      return s;
+  }
+  return cf_error_set(err, CF_EINVAL, "unknown option");
+}
+
+static const struct option fit_long_options[] = {
+    {"output", required_argument, NULL, 'o'},
+    {"model", required_argument, NULL, 'm'},
+    {"hold", required_argument, NULL, 'H'},
+    {"free", required_argument, NULL, 'F'},
+    {"loss", required_argument, NULL, 'l'},
+    {"loss-scale", required_argument, NULL, 'k'},
+    {"fit-exposures", no_argument, NULL, 'e'},
+    {"no-multistart", no_argument, NULL, 'M'},
+    {"density", required_argument, NULL, 'd'},
+    {"max-iterations", required_argument, NULL, 'i'},
+    {"threads", required_argument, NULL, 't'},
+    {"help", no_argument, NULL, 'h'},
+    {"footprint", required_argument, NULL, 'f'},
+    {"footprint-tolerance", required_argument, NULL, 'T'},
+    {"budget", required_argument, NULL, 'B'},
+    {"sampling", required_argument, NULL, 'S'},
+    {"trace", no_argument, NULL, 'R'},
+    {0}};
+
+/* The command line into cmd. Returns -1 to go on, else the exit status
+ * (--help, a bad option, too many --hold or --free; other errors are left
+ * in *s and err for the caller). */
+static int parse_command(int argc, char **argv, fit_command *cmd, cf_status *s, cf_error *err) {
   cf_fit_options defaults;
   cf_fit_default_options(&defaults, CF_MODEL_LAMBERT);
-  fit_settings set = {defaults.loss,          defaults.loss_scale, defaults.density,
-                      defaults.fit_exposures, defaults.multistart, defaults.max_iterations,
-                      defaults.threads,       defaults.footprint,  defaults.footprint_tolerance,
-                      defaults.budget,        defaults.sampling};
-  long max_iterations = 100, threads = 2;
-  cf_error err = {0};
-  cf_status s = CF_OK;
+  memset(cmd, 0, sizeof *cmd);
+  cmd->model_text = "auto";
+  cmd->set = (fit_settings){defaults.loss,
+                            defaults.loss_scale,
+                            defaults.density,
+                            defaults.fit_exposures,
+                            defaults.multistart,
+                            100,
+                            2,
+                            defaults.footprint,
+                            defaults.footprint_tolerance,
+                            defaults.budget,
+                            defaults.sampling};
   optind = 1;
   opterr = 0;
-  for (int c; s == CF_OK && (c = getopt_long(argc, argv, "o:", options, NULL)) != -1;) {
-    switch (c) {
-      case 'o':
-        out_dir = optarg;
-        break;
-      case 'm':
-        model_text = optarg;
-        break;
-      case 'H':
-      case 'F':
-        if ((c == 'H' ? hold_count : free_count) == MAX_ASSIGNMENTS) {
-          cli_report("fit", "too many --hold or --free options");
-          return CLI_EXIT_USAGE;
-        }
-        if (c == 'H')
-          holds[hold_count++] = optarg;
-        else
-          frees[free_count++] = optarg;
-        break;
-      case 'l':
-        if (strcmp(optarg, "huber") == 0)
-          set.loss = CF_LOSS_HUBER;
-        else if (strcmp(optarg, "cauchy") == 0)
-          set.loss = CF_LOSS_CAUCHY;
-        else if (strcmp(optarg, "none") == 0)
-          set.loss = CF_LOSS_NONE;
-        else
-          s = cf_error_set(&err, CF_EINVAL, "--loss: '%s' is not huber, cauchy or none", optarg);
-        break;
-      case 'k':
-        s = cli_parse_number(optarg, "--loss-scale", &set.loss_scale, &err);
-        if (s == CF_OK && !(set.loss_scale > 0.0))
-          s = cf_error_set(&err, CF_ERANGE, "--loss-scale must be greater than 0");
-        break;
-      case 'e':
-        set.fit_exposures = 1;
-        break;
-      case 'M':
-        set.multistart = 0;
-        break;
-      case 'd':
-        s = cli_parse_number(optarg, "--density", &set.density, &err);
-        if (s == CF_OK && !(set.density > 0.0))
-          s = cf_error_set(&err, CF_ERANGE, "--density must be greater than 0");
-        break;
-      case 'f':
-        if (strcmp(optarg, "auto") == 0)
-          set.footprint = 0;
-        else if (strcmp(optarg, "centre") == 0 || strcmp(optarg, "center") == 0)
-          set.footprint = 1;
-        else {
-          long samples = 0;
-          s = cli_parse_count(optarg, "--footprint", 1, CF_FIT_FOOTPRINT_MAX_SAMPLES, &samples,
-                              &err);
-          if (s != CF_OK)
-            s = cf_error_set(&err, CF_EINVAL,
-                             "--footprint: '%s' is not auto, centre or a number of samples per "
-                             "side from 1 to %d",
-                             optarg, CF_FIT_FOOTPRINT_MAX_SAMPLES);
-          set.footprint = (int)samples;
-        }
-        break;
-      case 'B': {
-        long budget = 0;
-        if (strcmp(optarg, "all") != 0 &&
-            cli_parse_count(optarg, "--budget", 100, 2000000000L, &budget, &err) != CF_OK)
-          s = cf_error_set(&err, CF_EINVAL,
-                           "--budget: '%s' is neither a number of observations (100 to 2e9) "
-                           "nor all",
-                           optarg);
-        set.budget = (size_t)budget; /* all: 0 */
-        break;
+  for (int c; *s == CF_OK && (c = getopt_long(argc, argv, "o:", fit_long_options, NULL)) != -1;) {
+    if (c == 'o') {
+      cmd->out_dir = optarg;
+    } else if (c == 'm') {
+      cmd->model_text = optarg;
+    } else if (c == 'H' || c == 'F') {
+      int *count = c == 'H' ? &cmd->hold_count : &cmd->free_count;
+      if (*count == MAX_ASSIGNMENTS) {
+        cli_report("fit", "too many --hold or --free options");
+        return CLI_EXIT_USAGE;
       }
-      case 'S': {
-        int found = 0;
-        for (int k = 0; k < CF_SAMPLING_COUNT; ++k)
-          if (strcmp(optarg, cf_sampling_name((cf_sampling)k)) == 0)
-            set.sampling = (cf_sampling)k, found = 1;
-        if (!found)
-          s = cf_error_set(&err, CF_EINVAL,
-                           "--sampling: '%s' is not uniform, stratified or importance", optarg);
-        break;
-      }
-      case 'T':
-        s = cli_parse_number(optarg, "--footprint-tolerance", &set.footprint_tolerance, &err);
-        if (s == CF_OK && !(set.footprint_tolerance > 0.0 && set.footprint_tolerance < 1.0))
-          s = cf_error_set(&err, CF_ERANGE, "--footprint-tolerance must be in (0, 1)");
-        break;
-      case 'i':
-        s = cli_parse_count(optarg, "--max-iterations", 1, 100000, &max_iterations, &err);
-        break;
-      case 't':
-        s = cli_parse_count(optarg, "--threads", 1, 256, &threads, &err);
-        break;
-      case 'h':
-        fit_usage(stdout);
-        return CLI_EXIT_OK;
-      default:
-        return cli_bad_option("fit", argv);
+      (c == 'H' ? cmd->holds : cmd->frees)[(*count)++] = optarg;
+    } else if (c == 'e') {
+      cmd->set.fit_exposures = 1;
+    } else if (c == 'M') {
+      cmd->set.multistart = 0;
+    } else if (c == 'R') {
+      cmd->trace = 1;
+    } else if (c == 'h') {
+      fit_usage(stdout);
+      return CLI_EXIT_OK;
+    } else if (c == '?' || c == ':') {
+      return cli_bad_option("fit", argv);
+    } else {
+      *s = parse_setting(c, optarg, &cmd->set, err);
     }
   }
-  set.max_iterations = (int)max_iterations;
-  set.threads = (int)threads;
-  if (s == CF_OK && optind + 1 != argc)
-    s = cf_error_set(&err, CF_EINVAL, "expected one capture file (see clayfit fit --help)");
-  if (s == CF_OK && !out_dir) s = cf_error_set(&err, CF_EINVAL, "-o OUTDIR is required");
-  int automatic = strcmp(model_text, "auto") == 0;
-  cf_fit_options ladder[CF_MODEL_COUNT];
+  if (*s == CF_OK && optind + 1 != argc)
+    *s = cf_error_set(err, CF_EINVAL, "expected one capture file (see clayfit fit --help)");
+  if (*s == CF_OK && !cmd->out_dir) *s = cf_error_set(err, CF_EINVAL, "-o OUTDIR is required");
+  cmd->capture_path = *s == CF_OK ? argv[optind] : NULL;
+  return -1;
+}
+
+/* --trace: a solver's line on stderr, after its model's code (the
+ * ladder's models are fitted side by side). */
+static void trace_line(void *user, const char *line) {
+  const cf_fit_options *o = user;
+  fprintf(stderr, "clayfit fit: %s: %s\n", cf_model_info_get(o->model)->code, line);
+}
+
+/* Each model's options: the ladder's (--model auto) or the one forced. */
+static cf_status fit_options(const fit_command *cmd, int *automatic, cf_model_id *model,
+                             cf_fit_options ladder[CF_MODEL_COUNT], cf_error *err) {
+  *automatic = strcmp(cmd->model_text, "auto") == 0;
+  *model = CF_MODEL_CLAY;
+  if (*automatic)
+    return ladder_options(&cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count,
+                          ladder, err);
+  cf_status s = cf_model_find(cmd->model_text, model, err);
+  if (s == CF_OK)
+    s = model_options(*model, &cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count,
+                      NULL, &ladder[*model], err);
+  return s;
+}
+
+/* The capture loaded, its warnings on stderr. */
+static cf_status load_capture(const char *path, const cli_context *ctx, cf_capture **capture,
+                              cf_error *err) {
+  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "fit"};
+  cf_status s = cf_capture_load(path, &load_options, capture, err);
+  if (s != CF_OK) return s;
+  cf_capture_summary summary;
+  cf_capture_summarize(*capture, &summary);
+  for (size_t i = 0; i < summary.warnings && !ctx->quiet; ++i)
+    fprintf(stderr, "clayfit fit: warning: %s\n", cf_capture_warning(*capture, i));
+  return CF_OK;
+}
+
+/* The fit done: OUTDIR/fit.json written, the warnings on stderr, the
+ * summary on stdout. */
+static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
+                           const cf_fit_options *o, const cf_fit_result *result,
+                           const cf_fit_choice *choice, const double seconds[2],
+                           const cli_context *ctx, cf_error *err) {
+  char path[4096];
+  cf_status s = cf_make_dirs(cmd->out_dir, err);
+  if (s == CF_OK) s = cf_path_join(cmd->out_dir, "fit.json", path, sizeof path, err);
+  if (s == CF_OK) {
+    cf_fit_report report = {capture,       cmd->capture_path, result,
+                            choice,        CLAYFIT_VERSION,   o->loss,
+                            o->loss_scale, o->density,        seconds[0],
+                            seconds[1],    o->footprint,      o->footprint_tolerance};
+    s = cf_fit_write_json(path, &report, err);
+  }
+  if (s != CF_OK) return s;
+  for (int i = 0; i < result->warning_count && !ctx->quiet; ++i)
+    fprintf(stderr, "clayfit fit: warning: %s\n", result->warnings[i]);
+  if (choice) print_choice(choice);
+  print_summary(result, path);
+  return CF_OK;
+}
+
+int cmd_fit(int argc, char **argv, cli_context *ctx) {
+  fit_command cmd;
+  cf_error err = {0};
+  cf_status s = CF_OK;
+  int exit_status = parse_command(argc, argv, &cmd, &s, &err);
+  if (exit_status >= 0) return exit_status;
+  int automatic = 0;
   cf_model_id model = CF_MODEL_CLAY;
-  if (s == CF_OK && !automatic) s = cf_model_find(model_text, &model, &err);
-  if (s == CF_OK && automatic)
-    s = ladder_options(&set, holds, hold_count, frees, free_count, ladder, &err);
-  else if (s == CF_OK)
-    s = model_options(model, &set, holds, hold_count, frees, free_count, NULL, &ladder[model],
-                      &err);
+  cf_fit_options ladder[CF_MODEL_COUNT];
+  if (s == CF_OK) s = fit_options(&cmd, &automatic, &model, ladder, &err);
   if (s != CF_OK) {
     cli_report("fit", err.message);
     return CLI_EXIT_USAGE;
   }
 
   double start = cf_now_seconds();
-  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "fit"};
   cf_capture *capture = NULL;
-  s = cf_capture_load(argv[optind], &load_options, &capture, &err);
+  s = load_capture(cmd.capture_path, ctx, &capture, &err);
   if (s != CF_OK) {
     cli_report("fit", err.message);
     return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
-  double load_seconds = cf_now_seconds() - start;
-  cf_capture_summary summary;
-  cf_capture_summarize(capture, &summary);
-  for (size_t i = 0; i < summary.warnings && !ctx->quiet; ++i)
-    fprintf(stderr, "clayfit fit: warning: %s\n", cf_capture_warning(capture, i));
-  for (int m = 0; m < CF_MODEL_COUNT && !ctx->quiet; ++m) {
-    ladder[m].progress = cli_progress;
-    ladder[m].progress_user = "fit";
+  double seconds[2] = {cf_now_seconds() - start, 0.0}; /* load, fit */
+  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
+    if (!ctx->quiet) ladder[m].progress = cli_progress, ladder[m].progress_user = "fit";
+    if (cmd.trace) ladder[m].trace = trace_line, ladder[m].trace_user = &ladder[m];
   }
   cf_fit_result result;
   cf_fit_choice choice;
-  if (automatic) {
+  if (automatic)
     s = cf_fit_auto(capture, ladder, &choice, &result, &err);
-  } else {
+  else
     s = cf_fit_run(capture, &ladder[model], &result, &err);
-  }
-  const cf_fit_options *o = &ladder[automatic && s == CF_OK ? choice.chosen : model];
-  double fit_seconds = cf_now_seconds() - start - load_seconds;
-  char path[4096];
-  if (s == CF_OK) s = cf_make_dirs(out_dir, &err);
-  if (s == CF_OK) s = cf_path_join(out_dir, "fit.json", path, sizeof path, &err);
-  if (s == CF_OK) {
-    cf_fit_report report = {
-        capture,         argv[optind], &result,       automatic ? &choice : NULL,
-        CLAYFIT_VERSION, o->loss,      o->loss_scale, o->density,
-        load_seconds,    fit_seconds,  o->footprint,  o->footprint_tolerance};
-    s = cf_fit_write_json(path, &report, &err);
-  }
-  if (s == CF_OK) {
-    for (int i = 0; i < result.warning_count && !ctx->quiet; ++i)
-      fprintf(stderr, "clayfit fit: warning: %s\n", result.warnings[i]);
-    if (automatic) print_choice(&choice);
-    print_summary(&result, path);
-  }
+  seconds[1] = cf_now_seconds() - start - seconds[0];
+  if (s == CF_OK)
+    s = write_fit(&cmd, capture, &ladder[automatic ? choice.chosen : model], &result,
+                  automatic ? &choice : NULL, seconds, ctx, &err);
   if (automatic) cf_fit_choice_free(&choice);
   cf_fit_result_free(&result);
   cf_capture_free(capture);

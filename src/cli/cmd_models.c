@@ -7,7 +7,7 @@
 #include "json_out.h"
 
 void cli_print_model_table(FILE *out) {
-  fprintf(out, "models (MODEL.md's ladder; code or name selects one):\n");
+  fprintf(out, "models (the ladder of docs/model.md §3; code or name selects one):\n");
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     const cf_model_info *model = cf_model_info_get((cf_model_id)m);
     fprintf(out, "  %s %-11s %s\n    parameters:", model->code, model->name, model->summary);

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "clayfit/capture.h"
-#include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "clayfit/report.h"
 #include "cli.h"
 
@@ -53,8 +53,10 @@ int cmd_report(int argc, char **argv, cli_context *ctx) {
   }
   cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "report"};
   cf_capture *capture = NULL;
-  s = cf_capture_load(capture_path ? capture_path : fit.capture_path, &load_options, &capture,
-                      &err);
+  if (!capture_path) s = cf_fit_file_check_capture(&fit, fit_path, &err);
+  if (s == CF_OK)
+    s = cf_capture_load(capture_path ? capture_path : fit.capture_path, &load_options, &capture,
+                        &err);
   if (s != CF_OK) {
     cli_report("report", err.message);
     cf_fit_file_free(&fit);

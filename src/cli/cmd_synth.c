@@ -16,7 +16,7 @@ static void synth_usage(FILE *out) {
           "                     [--reference ALBEDO]\n\n"
           "Renders a clay sphere (radius 1, centre at the origin, z up) on a textured\n"
           "ground inside a textured backdrop, seen by an orbit of N cameras (two rings,\n"
-          "20 and 35 degrees up, distance 5), each lit by its flash, with MODEL.md's image\n"
+          "20 and 35 degrees up, distance 5), each lit by its flash, with clayfit's image\n"
           "formation and S x S samples per pixel near and on the sphere. Writes DIR/images/,\n"
           "the true COLMAP model DIR/sparse/0/ (text), DIR/capture.json and DIR/truth.json.\n\n"
           "  --model M          material model (default clay), --param as in clayfit eval\n"
@@ -39,7 +39,78 @@ static void synth_usage(FILE *out) {
 
 enum { MAX_PARAMS = 64 };
 
-int cmd_synth(int argc, char **argv, cli_context *ctx) {
+static cf_status parse_size(const char *text, cf_synth_options *o, cf_error *err) {
+  int w = 0, h = 0;
+  char tail;
+  cf_status s = CF_OK;
+  if (sscanf(text, "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 16384 || h > 16384)
+    s = cf_error_set(err, CF_EINVAL, "--size: '%s' is not WIDTHxHEIGHT with each in [16, 16384]",
+                     text);
+  o->width = w, o->height = h;
+  o->focal_px = 1.2 * w;
+  return s;
+}
+
+static cf_status parse_format(const char *text, cf_synth_format *format, cf_error *err) {
+  if (strcmp(text, "png8") == 0)
+    *format = CF_SYNTH_PNG8;
+  else if (strcmp(text, "png16") == 0)
+    *format = CF_SYNTH_PNG16;
+  else if (strcmp(text, "exr") == 0)
+    *format = CF_SYNTH_EXR;
+  else
+    return cf_error_set(err, CF_EINVAL, "--format: '%s' is not png8, png16 or exr", text);
+  return CF_OK;
+}
+
+/* One option with a value into the options. */
+static cf_status parse_setting(int c, const char *arg, cf_synth_options *o, cf_error *err) {
+  long count = 0;
+  cf_status s = CF_OK;
+  switch (c) {
+    case 'n':
+      s = cli_parse_count(arg, "--images", 1, 10000, &count, err);
+      o->images = (int)count;
+      return s;
+    case 's':
+      return parse_size(arg, o, err);
+    case 'f':
+      return parse_format(arg, &o->format, err);
+    case 'S':
+      s = cli_parse_count(arg, "--supersample", 1, 16, &count, err);
+      o->supersample = (int)count;
+      return s;
+    case 'r':
+      return cli_parse_number(arg, "--read-noise", &o->read_noise, err);
+    case 'k':
+      return cli_parse_number(arg, "--shot-noise", &o->shot_noise, err);
+    case 'I':
+      return cli_parse_number(arg, "--flash-intensity", &o->flash_intensity, err);
+    case 'e':
+      s = cli_parse_count(arg, "--seed", 0, 2147483647, &count, err);
+      o->seed = (uint64_t)count;
+      return s;
+    case 'R':
+      s = cli_parse_number(arg, "--reference", &o->reference_albedo, err);
+      if (s == CF_OK && !(o->reference_albedo > 0.0 && o->reference_albedo <= 1.0))
+        s = cf_error_set(err, CF_EINVAL, "--reference: the albedo %g is outside (0, 1]",
+                         o->reference_albedo);
+      return s;
+  }
+  return cf_error_set(err, CF_EINVAL, "unknown option");
+}
+
+typedef struct synth_args {
+  const char *dir, *model_text;
+  const char *assignments[MAX_PARAMS];
+  int assignment_count;
+} synth_args;
+
+/* The command line into a and o. Returns -1 to go on, else the exit status
+ * (--help, a bad option, too many --param); other errors are left in *s
+ * and err. */
+static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_options *o, cf_status *s,
+                            cf_error *err) {
   static const struct option options[] = {{"output", required_argument, NULL, 'o'},
                                           {"model", required_argument, NULL, 'm'},
                                           {"param", required_argument, NULL, 'p'},
@@ -57,105 +128,64 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
                                           {"reference", required_argument, NULL, 'R'},
                                           {"help", no_argument, NULL, 'h'},
                                           {0}};
-  cf_synth_options o;
-  cf_synth_default_options(&o);
-  const char *dir = NULL, *model_text = "clay";
-  const char *assignments[MAX_PARAMS];
-  int assignment_count = 0;
-  cf_error err = {0};
-  cf_status s = CF_OK;
+  memset(a, 0, sizeof *a);
+  a->model_text = "clay";
   optind = 1;
   opterr = 0;
-  for (int c; s == CF_OK && (c = getopt_long(argc, argv, "o:", options, NULL)) != -1;) {
-    long count = 0;
-    switch (c) {
-      case 'o':
-        dir = optarg;
-        break;
-      case 'm':
-        model_text = optarg;
-        break;
-      case 'p':
-        if (assignment_count == MAX_PARAMS) {
-          cli_report("synth", "too many --param options");
-          return CLI_EXIT_USAGE;
-        }
-        assignments[assignment_count++] = optarg;
-        break;
-      case 'n':
-        s = cli_parse_count(optarg, "--images", 1, 10000, &count, &err);
-        o.images = (int)count;
-        break;
-      case 's': {
-        int w = 0, h = 0;
-        char tail;
-        if (sscanf(optarg, "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 16384 ||
-            h > 16384)
-          s = cf_error_set(&err, CF_EINVAL,
-                           "--size: '%s' is not WIDTHxHEIGHT with each in [16, 16384]", optarg);
-        o.width = w, o.height = h;
-        o.focal_px = 1.2 * w;
-        break;
+  for (int c; *s == CF_OK && (c = getopt_long(argc, argv, "o:", options, NULL)) != -1;) {
+    if (c == 'o') {
+      a->dir = optarg;
+    } else if (c == 'm') {
+      a->model_text = optarg;
+    } else if (c == 'p') {
+      if (a->assignment_count == MAX_PARAMS) {
+        cli_report("synth", "too many --param options");
+        return CLI_EXIT_USAGE;
       }
-      case 'f':
-        if (strcmp(optarg, "png8") == 0)
-          o.format = CF_SYNTH_PNG8;
-        else if (strcmp(optarg, "png16") == 0)
-          o.format = CF_SYNTH_PNG16;
-        else if (strcmp(optarg, "exr") == 0)
-          o.format = CF_SYNTH_EXR;
-        else
-          s = cf_error_set(&err, CF_EINVAL, "--format: '%s' is not png8, png16 or exr", optarg);
-        break;
-      case 'S':
-        s = cli_parse_count(optarg, "--supersample", 1, 16, &count, &err);
-        o.supersample = (int)count;
-        break;
-      case 'r':
-        s = cli_parse_number(optarg, "--read-noise", &o.read_noise, &err);
-        break;
-      case 'k':
-        s = cli_parse_number(optarg, "--shot-noise", &o.shot_noise, &err);
-        break;
-      case 'N':
-        o.read_noise = o.shot_noise = 0.0;
-        break;
-      case 'I':
-        s = cli_parse_number(optarg, "--flash-intensity", &o.flash_intensity, &err);
-        break;
-      case 'g':
-        o.silhouette_geometry = 1;
-        break;
-      case 'M':
-        o.write_masks = 1;
-        break;
-      case 'e':
-        s = cli_parse_count(optarg, "--seed", 0, 2147483647, &count, &err);
-        o.seed = (uint64_t)count;
-        break;
-      case 'R':
-        s = cli_parse_number(optarg, "--reference", &o.reference_albedo, &err);
-        if (s == CF_OK && !(o.reference_albedo > 0.0 && o.reference_albedo <= 1.0))
-          s = cf_error_set(&err, CF_EINVAL, "--reference: the albedo %g is outside (0, 1]",
-                           o.reference_albedo);
-        break;
-      case 'h':
-        synth_usage(stdout);
-        return CLI_EXIT_OK;
-      default:
-        return cli_bad_option("synth", argv);
+      a->assignments[a->assignment_count++] = optarg;
+    } else if (c == 'N') {
+      o->read_noise = o->shot_noise = 0.0;
+    } else if (c == 'g') {
+      o->silhouette_geometry = 1;
+    } else if (c == 'M') {
+      o->write_masks = 1;
+    } else if (c == 'h') {
+      synth_usage(stdout);
+      return CLI_EXIT_OK;
+    } else if (c == '?' || c == ':') {
+      return cli_bad_option("synth", argv);
+    } else {
+      *s = parse_setting(c, optarg, o, err);
     }
   }
-  if (s == CF_OK && optind < argc)
-    s = cf_error_set(&err, CF_EINVAL, "unexpected argument '%s'", argv[optind]);
-  if (s == CF_OK && !dir) s = cf_error_set(&err, CF_EINVAL, "-o DIR is required");
-  if (s == CF_OK && (s = cf_model_find(model_text, &o.model, &err)) == CF_OK) {
+  if (*s == CF_OK && optind < argc)
+    *s = cf_error_set(err, CF_EINVAL, "unexpected argument '%s'", argv[optind]);
+  if (*s == CF_OK && !a->dir) *s = cf_error_set(err, CF_EINVAL, "-o DIR is required");
+  return -1;
+}
+
+/* The model and its parameters: the defaults, then --param. */
+static cf_status synth_params(const synth_args *a, cf_synth_options *o, cf_error *err) {
+  cf_status s = cf_model_find(a->model_text, &o->model, err);
+  if (s == CF_OK) {
     int given[CF_MAX_DIM] = {0};
-    cf_model_default_params(o.model, o.params);
-    for (int k = 0; s == CF_OK && k < assignment_count; ++k)
-      s = cli_apply_param(o.model, "--param", assignments[k], o.params, given, &err);
+    cf_model_default_params(o->model, o->params);
+    for (int k = 0; s == CF_OK && k < a->assignment_count; ++k)
+      s = cli_apply_param(o->model, "--param", a->assignments[k], o->params, given, err);
   }
-  if (s == CF_OK) s = cf_params_check(o.model, o.params, &err);
+  if (s == CF_OK) s = cf_params_check(o->model, o->params, err);
+  return s;
+}
+
+int cmd_synth(int argc, char **argv, cli_context *ctx) {
+  cf_synth_options o;
+  cf_synth_default_options(&o);
+  synth_args a;
+  cf_error err = {0};
+  cf_status s = CF_OK;
+  int exit_status = parse_synth_args(argc, argv, &a, &o, &s, &err);
+  if (exit_status >= 0) return exit_status;
+  if (s == CF_OK) s = synth_params(&a, &o, &err);
   if (s != CF_OK) {
     cli_report("synth", err.message);
     return CLI_EXIT_USAGE;
@@ -164,11 +194,11 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
     o.progress = cli_progress;
     o.progress_user = "synth";
   }
-  s = cf_synth_write(dir, &o, &err);
+  s = cf_synth_write(a.dir, &o, &err);
   if (s != CF_OK) {
     cli_report("synth", err.message);
     return s == CF_ERANGE || s == CF_EINVAL ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
   }
-  if (!ctx->quiet) fprintf(stderr, "clayfit synth: wrote %s/capture.json\n", dir);
+  if (!ctx->quiet) fprintf(stderr, "clayfit synth: wrote %s/capture.json\n", a.dir);
   return CLI_EXIT_OK;
 }

@@ -1,5 +1,5 @@
 /* Whole-file reading and path handling (src/core/file.h). */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* POSIX 2008 with realpath (XSI) */
 #include "core/file.h"
 
 #include <errno.h>
@@ -72,6 +72,51 @@ cf_status cf_path_dirname(const char *path, char *out, size_t size, cf_error *er
   else
     n = snprintf(out, size, "%.*s", (int)(slash - path), path);
   if (n < 0 || (size_t)n >= size) return cf_error_set(err, CF_ERANGE, "path too long: %s", path);
+  return CF_OK;
+}
+
+/* The real path of a folder, into out (size bytes). */
+static cf_status real_folder(const char *folder, char *out, size_t size, cf_error *err) {
+  char *real = realpath(folder, NULL);
+  if (!real) return cf_error_set(err, CF_ENOTFOUND, "%s: %s", folder, strerror(errno));
+  int n = snprintf(out, size, "%s", real);
+  free(real);
+  if (n < 0 || (size_t)n >= size) return cf_error_set(err, CF_ERANGE, "path too long: %s", folder);
+  return CF_OK;
+}
+
+/* The length of the leading folders that the absolute paths a and b share
+ * ("/x/y" and "/x/yz": "/x"), up to a '/' or the end of a and b. */
+static size_t shared_folders(const char *a, const char *b) {
+  size_t shared = 0;
+  for (size_t i = 0;; ++i) {
+    int a_end = a[i] == '/' || a[i] == '\0', b_end = b[i] == '/' || b[i] == '\0';
+    if (a_end && b_end) shared = i;
+    if (a[i] != b[i] || a[i] == '\0') return a_end && b_end ? i : shared;
+  }
+}
+
+cf_status cf_path_relative(const char *from, const char *target, char *out, size_t size,
+                           cf_error *err) {
+  char folder[4096], from_real[4096], target_real[4096];
+  cf_status s = cf_path_dirname(target, folder, sizeof folder, err);
+  if (s == CF_OK) s = real_folder(from, from_real, sizeof from_real, err);
+  if (s == CF_OK) s = real_folder(folder, target_real, sizeof target_real, err);
+  if (s != CF_OK) return s;
+  const char *name = strrchr(target, '/') ? strrchr(target, '/') + 1 : target;
+  size_t n = strlen(target_real);
+  if (snprintf(target_real + n, sizeof target_real - n, "%s%s", n > 1 ? "/" : "", name) >=
+      (int)(sizeof target_real - n))
+    return cf_error_set(err, CF_ERANGE, "path too long: %s", target);
+  size_t shared = shared_folders(from_real, target_real);
+  char relative[8192] = "";
+  size_t used = 0;
+  for (const char *p = from_real + shared; *p; ++p) /* one ../ per folder left in from */
+    if (*p == '/' && p[1]) used += (size_t)snprintf(relative + used, sizeof relative - used, "../");
+  const char *rest = target_real + shared + (target_real[shared] == '/');
+  int n_out = snprintf(out, size, "%s%s", relative, rest);
+  if (n_out < 0 || (size_t)n_out >= size)
+    return cf_error_set(err, CF_ERANGE, "path too long: %s", target);
   return CF_OK;
 }
 

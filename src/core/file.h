@@ -24,6 +24,14 @@ cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size
 /* The folder part of a path ("a/b/c.json" → "a/b", "c.json" → "."). */
 cf_status cf_path_dirname(const char *path, char *out, size_t size, cf_error *err);
 
+/* `target` as a path relative to the folder `from` (each relative to the
+ * current folder, or absolute), computed between their real paths
+ * (symbolic links resolved), so that from/out names target wherever the
+ * two are read from. The folder `from` and the folder of `target` must
+ * exist (CF_ENOTFOUND otherwise); `target` itself need not. */
+cf_status cf_path_relative(const char *from, const char *target, char *out, size_t size,
+                           cf_error *err);
+
 /* 1 if a file or folder exists at path. */
 int cf_path_exists(const char *path);
 

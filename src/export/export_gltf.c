@@ -150,7 +150,7 @@ static json_t *material_json(const export_material *m, export_notes *n, json_t *
     json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->ior));
     export_note(n, EXPORT_EXACT,
                 "roughness %.6g -> roughnessFactor, f0 %.6g -> KHR_materials_ior ior %.6g: glTF's "
-                "specular lobe is MODEL.md's (GGX, height-correlated Smith, Schlick on v.h)",
+                "specular lobe is clayfit's (GGX, height-correlated Smith, Schlick on v.h)",
                 m->roughness, m->f0, m->ior);
     export_note(n, EXPORT_APPROX,
                 "glTF's fresnel_mix scales the diffuse by 1 - F(v.h) instead of "

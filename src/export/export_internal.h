@@ -54,19 +54,19 @@ void export_note(export_notes *n, export_note_kind kind, const char *format, ...
 void export_notes_write(export_text *t, const export_notes *n, const char *prefix);
 
 /* ---- the physics ---- */
-/* η = (1 + √F0)/(1 − √F0) (MODEL.md, Conventions) and back. */
+/* η = (1 + √F0)/(1 − √F0) (docs/model.md (7)) and back. */
 double export_ior_from_f0(double f0);
 double export_f0_from_ior(double ior);
-/* Oren-Nayar σ (radians, MODEL.md's qualitative model) as
+/* Oren-Nayar σ (radians, the qualitative model of docs/model.md (12)) as
  *  - MaterialX's GLSL oren_nayar_diffuse_bsdf roughness: σ/π
  *    (mx_oren_nayar_diffuse: sigma2 = (roughness π)², the same A and B);
  *  - Fujii's σ_F of the "improved" / energy-preserving Oren-Nayar of
  *    OpenPBR (EON, base_diffuse_roughness) and Blender 4.3+ (Diffuse
- *    Roughness), f ∝ 1 + σ_F s/t: σ_F = B/A, the ratio of MODEL.md's
+ *    Roughness), f ∝ 1 + σ_F s/t: σ_F = B/A, the ratio of docs/model.md (12)'s
  *    angular term to its constant term. */
 double export_sigma_materialx_glsl(double sigma);
 double export_sigma_fujii(double sigma);
-/* Burley's GTR1 width a = 0.1 − 0.099 gloss (MODEL.md, M3). */
+/* Burley's GTR1 width a = 0.1 − 0.099 gloss (docs/model.md (16)). */
 double export_gtr1_width(double gloss);
 
 /* The fitted material, read off a fit by model. */

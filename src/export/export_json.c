@@ -8,7 +8,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "capture/json_reader.h"
+#include "core/json_reader.h"
 #include "export_internal.h"
 
 static json_t *numbers(const double *x, int n) {
@@ -75,7 +75,8 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
       "perceptual: the GGX width is alpha = r^2", "f0",
       "normal-incidence reflectance; eta = (1 + sqrt(F0)) / (1 - sqrt(F0))", "base_f0",
       "M4: reflectance of the film-to-clay interface, relative to the film", "model",
-      "../shared/MODEL.md", "fit", "rmse", r->rmse, "relative_rmse", r->relative_rmse, "residuals",
+      "docs/model.md of clayfit " CLAYFIT_EXPORT_VERSION, "fit", "rmse", r->rmse, "relative_rmse",
+      r->relative_rmse, "residuals",
       (json_int_t)r->residuals, "scale", "value", r->scale, "sd", r->scale_sd, "fitted",
       r->scale_fitted, "response", "value", r->response, "sd", r->response_sd, "fitted",
       r->response_fitted, "loss", "type", fit->loss, "scale_sigma", fit->loss_scale, "provenance",

@@ -1,4 +1,4 @@
-/* The physics of the mapping from MODEL.md's models to the targets'
+/* The physics of the mapping from the models of docs/model.md §3 to the targets'
  * inputs, and what the writers share (export_internal.h). */
 #include <math.h>
 #include <stdarg.h>
@@ -166,7 +166,8 @@ void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_p
   export_printf(t, "%sfit: %s; capture: %s (%s radiometry, %s); relative RMSE %.4g\n", prefix,
                 fit_path ? fit_path : "(not given)", fit->capture_name, fit->radiometry,
                 fit->capture_path, fit->result.relative_rmse);
-  export_printf(t, "%smodel: ../shared/MODEL.md; mapping: clayfit README, \"Presets\"\n", prefix);
+  export_printf(t, "%smodel: docs/model.md of clayfit %s; mapping: docs/presets.md\n", prefix,
+                CLAYFIT_EXPORT_VERSION);
 }
 
 void export_common_notes(export_notes *n, const export_material *m) {

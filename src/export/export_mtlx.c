@@ -39,6 +39,39 @@ static void check_unit(export_notes *n, const char *name, double x) {
     export_note(n, EXPORT_RANGE, "%s = %.6g is outside the nodedef's range [0, 1]", name, x);
 }
 
+/* M4 in standard_surface: the film as the coat, the clay's interface as
+ * the specular lobe. */
+static void standard_surface_clay(const export_material *m, mtlx_shader *s, export_notes *n) {
+  set1(s, "specular_roughness", m->base_roughness);
+  set1(s, "specular_IOR", m->base_ior_rel);
+  set1(s, "coat", 1.0);
+  set3(s, "coat_color", m->transmittance);
+  set1(s, "coat_roughness", m->film_roughness);
+  set1(s, "coat_IOR", m->film_ior);
+  set1(s, "coat_affect_color", 0.0);
+  set1(s, "coat_affect_roughness", 0.0);
+  export_note(n, EXPORT_EXACT,
+              "film_roughness %.6g -> coat_roughness (GGX, alpha = r^2, height-correlated "
+              "Smith as clayfit)",
+              m->film_roughness);
+  export_note(n, EXPORT_APPROX,
+              "film_f0 %.6g -> coat_IOR %.6g: the coat's dielectric_bsdf uses the exact "
+              "dielectric Fresnel, not Schlick's",
+              m->film_f0, m->film_ior);
+  export_note(n, EXPORT_APPROX,
+              "base lobe: specular_roughness = base_roughness %.6g, specular_IOR = the "
+              "relative IOR %.6g (standard_surface's nodegraph gives specular_IOR to the "
+              "base's dielectric_bsdf as it is, also under the coat, so the lobe's F0 stays "
+              "base_f0 %.6g); the lobe is evaluated at the outside directions, not the "
+              "refracted l', v', and without the film's 1/eta1^2 and T(c_i) T(c_o)",
+              m->base_roughness, m->base_ior_rel, m->base_f0);
+  export_note(n, EXPORT_APPROX,
+              "the diffuse under the film: the layer nodes scale it by the coat's and the "
+              "base lobe's directional albedo instead of clayfit's transmissions");
+  export_note(n, EXPORT_DROPPED,
+              "the recycling factor K (light the film reflects back down to the clay)");
+}
+
 static void standard_surface(const export_material *m, mtlx_shader *s, export_notes *n) {
   double sigma = export_sigma_materialx_glsl(m->sigma);
   set1(s, "base", 1.0);
@@ -49,7 +82,7 @@ static void standard_surface(const export_material *m, mtlx_shader *s, export_no
     export_note(n, EXPORT_EXACT,
                 "diffuse_roughness = sigma / pi = %.6g (sigma %.6g rad): MaterialX's GLSL "
                 "oren_nayar_diffuse_bsdf (libraries/pbrlib/genglsl/lib/mx_microfacet_diffuse.glsl, "
-                "mx_oren_nayar_diffuse) uses sigma^2 = (roughness pi)^2 and MODEL.md's A, B and "
+                "mx_oren_nayar_diffuse) uses sigma^2 = (roughness pi)^2 and clayfit's A, B and "
                 "s/t; the OSL backend passes the same number to OSL's oren_nayar closure, whose "
                 "roughness is Fujii's improved form: approximate there",
                 sigma, m->sigma);
@@ -65,34 +98,7 @@ static void standard_surface(const export_material *m, mtlx_shader *s, export_no
   set1(s, "specular", 1.0);
   set3(s, "specular_color", (double[3]){1, 1, 1});
   if (m->model == CF_MODEL_CLAY) {
-    set1(s, "specular_roughness", m->base_roughness);
-    set1(s, "specular_IOR", m->base_ior_rel);
-    set1(s, "coat", 1.0);
-    set3(s, "coat_color", m->transmittance);
-    set1(s, "coat_roughness", m->film_roughness);
-    set1(s, "coat_IOR", m->film_ior);
-    set1(s, "coat_affect_color", 0.0);
-    set1(s, "coat_affect_roughness", 0.0);
-    export_note(n, EXPORT_EXACT,
-                "film_roughness %.6g -> coat_roughness (GGX, alpha = r^2, height-correlated "
-                "Smith as MODEL.md)",
-                m->film_roughness);
-    export_note(n, EXPORT_APPROX,
-                "film_f0 %.6g -> coat_IOR %.6g: the coat's dielectric_bsdf uses the exact "
-                "dielectric Fresnel, not Schlick's",
-                m->film_f0, m->film_ior);
-    export_note(n, EXPORT_APPROX,
-                "base lobe: specular_roughness = base_roughness %.6g, specular_IOR = the "
-                "relative IOR %.6g (standard_surface's nodegraph gives specular_IOR to the "
-                "base's dielectric_bsdf as it is, also under the coat, so the lobe's F0 stays "
-                "base_f0 %.6g); the lobe is evaluated at the outside directions, not the "
-                "refracted l', v', and without the film's 1/eta1^2 and T(c_i) T(c_o)",
-                m->base_roughness, m->base_ior_rel, m->base_f0);
-    export_note(n, EXPORT_APPROX,
-                "the diffuse under the film: the layer nodes scale it by the coat's and the "
-                "base lobe's directional albedo instead of MODEL.md's transmissions");
-    export_note(n, EXPORT_DROPPED,
-                "the recycling factor K (light the film reflects back down to the clay)");
+    standard_surface_clay(m, s, n);
     return;
   }
   set1(s, "specular_roughness", m->roughness);
@@ -101,7 +107,7 @@ static void standard_surface(const export_material *m, mtlx_shader *s, export_no
               m->roughness);
   export_note(n, EXPORT_APPROX,
               "f0 %.6g -> specular_IOR %.6g: dielectric_bsdf uses the exact dielectric Fresnel "
-              "(Schlick's in MODEL.md), and the layer node scales the diffuse by the lobe's "
+              "(Schlick's in clayfit), and the layer node scales the diffuse by the lobe's "
               "directional albedo instead of (1 - F(c_i))(1 - F(c_o))",
               m->f0, m->ior);
   if (m->model == CF_MODEL_CLEARCOAT) {
@@ -133,7 +139,7 @@ static void open_pbr_surface(const export_material *m, mtlx_shader *s, export_no
                 "energy-preserving Oren-Nayar (EON, Portsmouth et al. 2025; "
                 "oren_nayar_diffuse_bsdf with energy_compensation true in "
                 "libraries/bxdf/open_pbr_surface.mtlx) whose roughness is Fujii's sigma_F in "
-                "f ~ 1 + sigma_F s/t: B/A keeps MODEL.md's ratio of the angular to the constant "
+                "f ~ 1 + sigma_F s/t: B/A keeps clayfit's ratio of the angular to the constant "
                 "term; EON's normalisation and multiple-scattering term differ",
                 sigma, m->sigma);
   if (m->model == CF_MODEL_LAMBERT || m->model == CF_MODEL_OREN_NAYAR) {
@@ -167,7 +173,7 @@ static void open_pbr_surface(const export_material *m, mtlx_shader *s, export_no
                 m->base_ior_abs, m->base_ior_rel, m->base_f0, m->base_roughness);
     export_note(n, EXPORT_APPROX,
                 "coat_darkening is left at OpenPBR's 1: its internal-reflection darkening is "
-                "OpenPBR's counterpart of MODEL.md's recycling factor K, with the opposite "
+                "OpenPBR's counterpart of clayfit's recycling factor K, with the opposite "
                 "sign");
     return;
   }

@@ -55,45 +55,6 @@ void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   o->sampling = CF_SAMPLING_STRATIFIED;
 }
 
-const char *cf_fit_stage_name(cf_fit_stage stage) {
-  switch (stage) {
-    case CF_FIT_STAGE_START:
-      return "start";
-    case CF_FIT_STAGE_REFINE:
-      return "refine";
-    case CF_FIT_STAGE_SOLVE:
-      return "solve";
-    case CF_FIT_STAGE_STATISTICS:
-      return "statistics";
-    case CF_FIT_STAGE_COUNT:
-      break;
-  }
-  return "unknown";
-}
-
-const char *cf_param_status_name(cf_param_status status) {
-  switch (status) {
-    case CF_PARAM_FITTED:
-      return "fitted";
-    case CF_PARAM_HELD:
-      return "held";
-    case CF_PARAM_HELD_FOR_SCALE:
-      return "held: sets the absolute scale";
-    case CF_PARAM_UNCONSTRAINED:
-      return "not constrained by this capture";
-    case CF_PARAM_AT_BOUND:
-      return "fitted: at a bound of its range";
-  }
-  return "unknown";
-}
-
-void cf_fit_result_free(cf_fit_result *result) {
-  free(result->exposures);
-  free(result->image_rmse);
-  free(result->image_relative_rmse);
-  result->exposures = result->image_rmse = result->image_relative_rmse = NULL;
-}
-
 /* Relative radiometry fixes the scale by holding the interface F0 (0.04
  * unless the user holds another value). When that needs an albedo above
  * its bound 1 (an albedo channel ends at the bound), the assumption is
@@ -183,9 +144,7 @@ static cf_status check_options(const cf_fit_options *o, cf_error *err) {
   const cf_model_info *m = cf_model_info_get(o->model);
   if (!m) return cf_error_set(err, CF_EINVAL, "invalid model id %d", (int)o->model);
   for (int k = 0; k < m->dim; ++k) {
-    const cf_param_info *info = NULL;
-    for (int j = 0; j < m->param_count; ++j)
-      if (k >= m->offsets[j]) info = cf_param_info_get(m->params[j]);
+    const cf_param_info *info = cf_model_slot_param(o->model, k, NULL);
     char name[48];
     cf_model_slot_name(o->model, k, name, sizeof name);
     if (o->hold[k] && (!(o->hold_value[k] >= info->lower) || !(o->hold_value[k] <= info->upper)))
@@ -258,126 +217,171 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
   return CF_OK;
 }
 
-cf_status fit_run_population(const cf_capture *capture, const fit_population *population,
-                             const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
-  memset(r, 0, sizeof *r);
-  r->model = o->model;
-  cf_status s = check_options(o, err);
-  if (s != CF_OK) return s;
-  const cf_model_info *m = cf_model_info_get(o->model);
+/* One run of fit_run_population: what its steps share. */
+typedef struct fit_run {
+  const cf_capture *capture;
+  const fit_population *population;
+  const cf_fit_options *o;
+  cf_fit_result *r;
   fit_plan plan;
-  fit_plan_for(capture, o, &plan);
-  if (cf_capture_observations(capture)->count == 0 || population->count == 0)
-    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+  fit_problem p; /* over the whole population */
+  cf_lsq_summary summary;
+  double sigma; /* one σ for all (no noise model) */
+  int has_noise, switched;
+  /* the normal equations and the covariance of the unknowns (n² each,
+   * room for `normal_capacity` entries) */
+  double *jtj, *covariance;
+  size_t normal_capacity;
+} fit_run;
 
-  /* 2. the start: the multi-start, or the one given */
-  double params[CF_MAX_DIM], log_scale = 0.0, sigma = 1.0, clock = cf_now_seconds(), then;
-  double response = 1.0; /* γ: fitted on every observation only, from 1 or the start's */
-  if (o->use_start) {
-    memcpy(params, o->start, sizeof params);
-    for (int k = 0; k < m->dim; ++k)
-      if (o->hold[k]) params[k] = o->hold_value[k];
-    int sk = fit_scale_slot(o->model); /* the scale's assumption, not the start's F0 */
-    if (sk >= 0 && plan.status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
-      params[sk] = FIT_SCALE_F0;
-    log_scale = plan.scale ? log(o->start_scale) : 0.0;
-    response = o->start_response > 0.0 ? o->start_response : 1.0;
-    s = fit_start_sigma(capture, population, o, params, log_scale, &sigma, err);
-  } else {
-    s = fit_multistart(capture, population, o, &plan, r, params, &log_scale, &sigma, err);
-  }
-  if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
-  clock = then;
+/* Room in run->jtj and run->covariance for the unknowns declared now. */
+static cf_status normal_room(fit_run *run, cf_error *err) {
+  size_t n = (size_t)run->p.num_unknowns, need = n > 0 ? n * n : 1;
+  if (need <= run->normal_capacity) return CF_OK;
+  free(run->jtj);
+  free(run->covariance);
+  run->jtj = malloc(need * sizeof *run->jtj);
+  run->covariance = malloc(need * sizeof *run->covariance);
+  run->normal_capacity = run->jtj && run->covariance ? need : 0;
+  if (!run->normal_capacity)
+    return cf_error_set(err, CF_ENOMEM, "out of memory for the normal equations of %zu unknowns",
+                        n);
+  return CF_OK;
+}
 
-  /* 3. a larger subsample, then the whole population, with σ and the
-   * robust loss */
-  int switched = 0;
-  s = refine_on_subsample(capture, population, o, &plan, REFINE_TARGET, sigma, params, &log_scale,
-                          r, &switched, err);
+/* 2. The start: the multi-start, or the one given (with the response
+ * exponent it gives; 1 otherwise). */
+static cf_status find_start(fit_run *run, double *params, double *log_scale, double *response,
+                            cf_error *err) {
+  const cf_fit_options *o = run->o;
+  *log_scale = 0.0;
+  *response = 1.0;
+  if (!o->use_start)
+    return fit_multistart(run->capture, run->population, o, &run->plan, run->r, params, log_scale,
+                          &run->sigma, err);
+  memcpy(params, o->start, sizeof o->start);
+  for (int k = 0; k < cf_model_info_get(o->model)->dim; ++k)
+    if (o->hold[k]) params[k] = o->hold_value[k];
+  int sk = fit_scale_slot(o->model); /* the scale's assumption, not the start's F0 */
+  if (sk >= 0 && run->plan.status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
+    params[sk] = FIT_SCALE_F0;
+  *log_scale = run->plan.scale ? log(o->start_scale) : 0.0;
+  *response = o->start_response > 0.0 ? o->start_response : 1.0;
+  return fit_start_sigma(run->capture, run->population, o, params, *log_scale, &run->sigma, err);
+}
+
+/* The problem over the whole population from the refined values: σ, the
+ * robust loss, the response exponent when the tone curve is unknown. */
+static cf_status full_problem(fit_run *run, const double *params, double log_scale, double response,
+                              cf_error *err) {
+  const cf_fit_options *o = run->o;
+  fit_problem *p = &run->p;
+  cf_status s = fit_problem_init(p, run->capture, o->model, run->population->index,
+                                 run->population->count, fit_threads(o), err);
   if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
-  clock = then;
-  fit_problem p;
-  s = fit_problem_init(&p, capture, o->model, population->index, population->count, fit_threads(o),
-                       err);
-  if (s != CF_OK) return s;
-  if (population->weight) s = fit_problem_set_sample_weights(&p, population->weight, err);
-  memcpy(p.params, params, sizeof params);
-  p.log_scale = log_scale;
+  if (run->population->weight) s = fit_problem_set_sample_weights(p, run->population->weight, err);
+  memcpy(p->params, params, sizeof p->params);
+  p->log_scale = log_scale;
   /* (the trust region starts anew, not where the refinement's ended: that
    * one ends with Gauss-Newton steps, a radius of 1e10 and more, but every
    * observation and their pixel footprints move the minimum; on DiLiGenT,
    * default budget, the undamped steps then kept 1 % of their promise for
    * 29 iterations while the radius halved, 48 iterations in all where 24
    * reach the same cost) */
-  p.newton_start = 1; /* from the refinement's (or the best start's) minimum */
+  p->newton_start = 1; /* from the refinement's (or the best start's) minimum */
   /* an unknown tone curve: the response exponent is fitted from here on
    * (the starts and the subsample assume a linear response) */
   cf_capture_summary about;
-  cf_capture_summarize(capture, &about);
-  plan.response = about.tone_curve_unknown;
-  p.response = plan.response ? response : 1.0;
-  cf_lsq_summary summary = {0};
-  double *covariance = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *covariance);
-  double *jtj = malloc((size_t)FIT_MAX_FREE * FIT_MAX_FREE * sizeof *jtj);
-  if (!covariance || !jtj) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) s = fit_declare(&p, &plan, err);
-  int has_noise = fit_capture_has_noise(capture);
-  if (!has_noise) {
-    fit_problem_set_sigma(&p, capture, sigma);
-    r->sigma = sigma;
+  cf_capture_summarize(run->capture, &about);
+  run->plan.response = about.tone_curve_unknown;
+  p->response = run->plan.response ? response : 1.0;
+  if (s == CF_OK) s = fit_declare(p, &run->plan, err);
+  run->has_noise = fit_capture_has_noise(run->capture);
+  if (!run->has_noise) {
+    fit_problem_set_sigma(p, run->capture, run->sigma);
+    run->r->sigma = run->sigma;
   }
-  p.loss = o->loss;
-  p.loss_scale = o->loss_scale;
-  /* the pixel footprints at the refined values, which are near the end:
-   * the solves below then see them from the start, and the rounds after
-   * them seldom change anything */
-  if (s == CF_OK) s = fit_footprint_update(&p, capture, o, NULL, err);
-  /* with a noise model, weights from the prediction, to their fixed point */
-  int weights_current = 0;
-  if (s == CF_OK && has_noise)
-    s = fit_solve_reweighted(&p, capture, o, REWEIGHT_ROUNDS, &summary, &weights_current, err);
-  if (s == CF_OK && has_noise && !weights_current) s = fit_problem_reweight(&p, capture, err);
+  p->loss = o->loss;
+  p->loss_scale = o->loss_scale;
+  return s;
+}
 
-  /* the pixel footprints where a lobe is narrower than a pixel, at the
-   * parameters found, until the samples settle */
+/* The pixel footprints at the refined values, which are near the end (the
+ * solves below then see them from the start, and the rounds after them
+ * seldom change anything); with a noise model, weights from the
+ * prediction to their fixed point; then the footprints where a lobe is
+ * narrower than a pixel, at the parameters found, until the samples
+ * settle. */
+static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
+  fit_problem *p = &run->p;
+  const cf_fit_options *o = run->o;
+  cf_status s = fit_footprint_update(p, run->capture, o, NULL, err);
+  int weights_current = 0;
+  if (s == CF_OK && run->has_noise)
+    s = fit_solve_reweighted(p, run->capture, o, REWEIGHT_ROUNDS, &run->summary, &weights_current,
+                             err);
+  if (s == CF_OK && run->has_noise && !weights_current)
+    s = fit_problem_reweight(p, run->capture, err);
   for (int round = 0; s == CF_OK && round < FOOTPRINT_ROUNDS; ++round) {
     int changed = 0;
-    s = fit_footprint_update(&p, capture, o, &changed, err);
+    s = fit_footprint_update(p, run->capture, o, &changed, err);
     if (s != CF_OK || !changed) break;
     fit_progress(o, "integrating pixel footprints", (size_t)round, FOOTPRINT_ROUNDS);
     double decrement; /* samples that move nothing need no solve */
-    s = fit_newton_decrement(&p, o, &decrement, err);
+    s = fit_newton_decrement(p, o, &decrement, err);
     if (s != CF_OK || decrement < FIT_RESOLVE_DECREMENT) break;
-    s = fit_solve(&p, o, o->max_iterations, &summary, err);
-    if (s == CF_OK && has_noise) s = fit_problem_reweight(&p, capture, err);
+    s = fit_solve(p, o, o->max_iterations, &run->summary, err);
+    if (s == CF_OK && run->has_noise) s = fit_problem_reweight(p, run->capture, err);
   }
+  return s;
+}
 
-  /* 4. robust solves until every free parameter is constrained */
+/* One round of step 4: solve (unless the first finds the problem settled),
+ * switch the scale's assumption if the albedo says so, and the
+ * covariance, into run->jtj and run->covariance, with *rank_deficient. */
+static cf_status solve_with_covariance(fit_run *run, int round, int *rank_deficient,
+                                       cf_error *err) {
+  fit_problem *p = &run->p;
+  const cf_fit_options *o = run->o;
+  int settled = 0; /* (jtj then holds the normal equations at the solution) */
+  cf_status s = normal_room(run, err);
+  if (s == CF_OK && round == 0)
+    s = settled_at_minimum(p, o, run->jtj, &run->summary, &settled, err);
+  if (s == CF_OK && !settled)
+    s = fit_solve_normal(p, o, o->max_iterations, &run->summary, run->jtj, err);
+  if (s == CF_OK && !run->switched && scale_from_albedo(p, o, &run->plan, run->r)) {
+    run->switched = 1;
+    s = fit_declare(p, &run->plan, err);
+    if (s == CF_OK) s = normal_room(run, err);
+    if (s == CF_OK) s = fit_solve_normal(p, o, o->max_iterations, &run->summary, run->jtj, err);
+  }
+  if (s == CF_OK) s = fit_free_covariance(p, run->jtj, run->covariance, rank_deficient, err);
+  if (s == CF_OK && !*rank_deficient)
+    s = fit_sample_covariance(p, fit_threads(o), run->covariance, err);
+  return s;
+}
+
+/* 4. Robust solves until every free parameter is constrained: those the
+ * capture does not constrain held at their defaults, and for M4 the base
+ * under the film hidden when the photos do not show it. */
+static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
+  fit_problem *p = &run->p;
+  const cf_fit_options *o = run->o;
+  cf_status s = CF_OK;
   int rank_deficient = 0;
   fit_hidden_base hidden = {0};
   for (int round = 0; s == CF_OK && round < MAX_UNCONSTRAINED_ROUNDS; ++round) {
     fit_progress(o, "solving", (size_t)round, MAX_UNCONSTRAINED_ROUNDS);
-    int settled = 0; /* (jtj then holds the normal equations at the solution) */
-    if (round == 0) s = settled_at_minimum(&p, o, jtj, &summary, &settled, err);
-    if (s == CF_OK && !settled) s = fit_solve_normal(&p, o, o->max_iterations, &summary, jtj, err);
-    if (s == CF_OK && !switched && scale_from_albedo(&p, o, &plan, r)) {
-      switched = 1;
-      s = fit_declare(&p, &plan, err);
-      if (s == CF_OK) s = fit_solve_normal(&p, o, o->max_iterations, &summary, jtj, err);
-    }
-    if (s == CF_OK) s = fit_free_covariance(&p, jtj, covariance, &rank_deficient, err);
-    if (s == CF_OK && !rank_deficient)
-      s = fit_sample_covariance(&p, fit_threads(o), covariance, err);
+    s = solve_with_covariance(run, round, &rank_deficient, err);
     int found = 0;
-    if (s == CF_OK) s = fit_find_unconstrained(&p, jtj, covariance, rank_deficient, &plan, &found);
+    if (s == CF_OK)
+      s = fit_find_unconstrained(p, run->jtj, run->covariance, rank_deficient, &run->plan, &found);
     if (s == CF_OK && !found && !hidden.tested && !rank_deficient) {
       /* M4: is the base seen at all? (once) */
-      s = fit_test_hidden_base(&p, &plan, o, summary.final_cost, &hidden, err);
+      s = fit_test_hidden_base(p, &run->plan, o, run->summary.final_cost, &hidden, err);
       hidden.tested = 1;
       if (s == CF_OK && hidden.hidden) {
-        fit_add_warning(r,
+        fit_add_warning(run->r,
                         "the photos do not show the base under the film: the film alone explains "
                         "them (chi2 higher by %.3g with the base hidden, against BIC's price %.3g "
                         "of its %d parameters), so the base's parameters are not constrained: "
@@ -390,57 +394,100 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     if (s != CF_OK || !found) break;
     double defaults[CF_MAX_DIM];
     cf_model_default_params(o->model, defaults);
-    for (int k = 0; k < m->dim; ++k) /* held at the default */
-      if (plan.status[k] == CF_PARAM_UNCONSTRAINED) p.params[k] = defaults[k];
-    s = fit_declare(&p, &plan, err);
+    for (int k = 0; k < p->dim; ++k) /* held at the default */
+      if (run->plan.status[k] == CF_PARAM_UNCONSTRAINED) p->params[k] = defaults[k];
+    s = fit_declare(p, &run->plan, err);
   }
   if (s == CF_OK && rank_deficient)
     s = cf_error_set(err, CF_ENUMERIC,
                      "the capture does not constrain the fit even with the unconstrained "
                      "parameters held");
   fit_progress(o, "solving", MAX_UNCONSTRAINED_ROUNDS, MAX_UNCONSTRAINED_ROUNDS);
+  return s;
+}
 
-  /* 5. the result */
-  if (s == CF_OK) s = fill_result(&p, &plan, covariance, r, err);
-  if (s == CF_OK) {
-    r->cost = summary.final_cost;
-    r->iterations = p.iterations;
-    r->solves = p.solves;
-    memcpy(r->trace, p.trace, (size_t)p.trace_count * sizeof *p.trace);
-    r->trace_count = p.trace_count;
-    snprintf(r->termination, sizeof r->termination, "%s", summary.termination);
-    r->solve_seconds = p.solver_seconds;
-    if (strcmp(summary.termination, "NO_CONVERGENCE") == 0) /* out of iterations */
-      fit_add_warning(r,
-                      "the last solve ended without converging (%s after its %d iterations "
-                      "at most): the values may be short of the minimum; raise "
-                      "--max-iterations%s",
-                      summary.termination, o->max_iterations,
-                      population->weight ? ", or the pixel budget (a small sample may not "
-                                           "show the highlight well enough to fit it)"
-                                         : "");
-    fit_footprint_tally(&p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);
-    r->ambiguous = fit_ambiguous(r, o->model, has_noise ? 1.0 : sigma * sigma);
-    if (r->ambiguous)
-      fit_add_warning(r,
-                      "on the multi-start's subsample two starts far apart ended within "
-                      "the noise of each other (see starts); the fit on all observations "
-                      "went on from the best: see its sd and correlations");
-    cf_capture_summary summary_of_capture;
-    cf_capture_summarize(capture, &summary_of_capture);
-    if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
-      fit_add_warning(r,
-                      "the capture's radiometry is relative and %s has no interface F0 to "
-                      "fix the scale: its albedo is in the lights' relative units",
-                      m->code);
-  }
+/* 5. The result: the values, their covariance, the solver's summary and
+ * the warnings it calls for. */
+static cf_status report_result(fit_run *run, cf_error *err) {
+  const fit_problem *p = &run->p;
+  const cf_fit_options *o = run->o;
+  cf_fit_result *r = run->r;
+  cf_status s = fill_result(p, &run->plan, run->covariance, r, err);
+  if (s != CF_OK) return s;
+  r->cost = run->summary.final_cost;
+  r->iterations = p->iterations;
+  r->solves = p->solves;
+  memcpy(r->trace, p->trace, (size_t)p->trace_count * sizeof *p->trace);
+  r->trace_count = p->trace_count;
+  const char *termination = cf_lsq_termination_name(run->summary.ending);
+  snprintf(r->termination, sizeof r->termination, "%s", termination);
+  r->solve_seconds = p->solver_seconds;
+  if (run->summary.ending == CF_LSQ_END_OUT_OF_ITERATIONS)
+    fit_add_warning(r,
+                    "the last solve ended without converging (%s after its %d iterations "
+                    "at most): the values may be short of the minimum; raise "
+                    "--max-iterations%s",
+                    termination, o->max_iterations,
+                    run->population->weight ? ", or the pixel budget (a small sample may not "
+                                              "show the highlight well enough to fit it)"
+                                            : "");
+  fit_footprint_tally(p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);
+  r->ambiguous = fit_ambiguous(r, o->model, run->has_noise ? 1.0 : run->sigma * run->sigma);
+  if (r->ambiguous)
+    fit_add_warning(r,
+                    "on the multi-start's subsample two starts far apart ended within "
+                    "the noise of each other (see starts); the fit on all observations "
+                    "went on from the best: see its sd and correlations");
+  cf_capture_summary summary_of_capture;
+  cf_capture_summarize(run->capture, &summary_of_capture);
+  if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
+    fit_add_warning(r,
+                    "the capture's radiometry is relative and %s has no interface F0 to "
+                    "fix the scale: its albedo is in the lights' relative units",
+                    cf_model_info_get(o->model)->code);
+  return CF_OK;
+}
+
+/* Steps 3 (on every observation) to 5, from the refined values. */
+static cf_status solve_population(fit_run *run, const double *params, double log_scale,
+                                  double response, cf_error *err) {
+  cf_status s = full_problem(run, params, log_scale, response, err);
+  if (s == CF_OK) s = settle_weights_and_footprints(run, err);
+  if (s == CF_OK) s = solve_until_constrained(run, err);
+  if (s == CF_OK) s = report_result(run, err);
+  return s;
+}
+
+cf_status fit_run_population(const cf_capture *capture, const fit_population *population,
+                             const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
+  memset(r, 0, sizeof *r);
+  r->model = o->model;
+  cf_status s = check_options(o, err);
+  if (s != CF_OK) return s;
+  fit_run run = {.capture = capture, .population = population, .o = o, .r = r, .sigma = 1.0};
+  fit_plan_for(capture, o, &run.plan);
+  if (cf_capture_observations(capture)->count == 0 || population->count == 0)
+    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+
+  /* 2. the start; 3. a larger subsample, then the whole population */
+  double params[CF_MAX_DIM], log_scale, response, clock = cf_now_seconds(), then;
+  s = find_start(&run, params, &log_scale, &response, err);
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
+  clock = then;
+  s = refine_on_subsample(capture, population, o, &run.plan, REFINE_TARGET, run.sigma, params,
+                          &log_scale, r, &run.switched, err);
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
+  clock = then;
+  s = solve_population(&run, params, log_scale, response, err);
   r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = cf_now_seconds()) - clock;
   clock = then;
-  if (s == CF_OK) s = fit_statistics(&p, o, r, err);
+  if (s == CF_OK) s = fit_statistics(&run.p, o, r, err);
   r->stage_seconds[CF_FIT_STAGE_STATISTICS] = cf_now_seconds() - clock;
-  free(jtj);
-  free(covariance);
-  fit_problem_release(&p);
+  free(run.jtj);
+  free(run.covariance);
+  fit_problem_release(&run.p);
   if (s != CF_OK) cf_fit_result_free(r);
   return s;
 }

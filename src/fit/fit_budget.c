@@ -7,20 +7,6 @@
 
 #include "order_statistics.h"
 
-const char *cf_sampling_name(cf_sampling sampling) {
-  switch (sampling) {
-    case CF_SAMPLING_UNIFORM:
-      return "uniform";
-    case CF_SAMPLING_STRATIFIED:
-      return "stratified";
-    case CF_SAMPLING_IMPORTANCE:
-      return "importance";
-    case CF_SAMPLING_COUNT:
-      break;
-  }
-  return "unknown";
-}
-
 static size_t member(const fit_population *from, size_t i) {
   return from->index ? from->index[i] : i;
 }

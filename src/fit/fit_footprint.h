@@ -1,4 +1,4 @@
-/* Pixel footprints in the fit (MODEL.md, "Image formation"): a pixel
+/* Pixel footprints in the fit (docs/model.md §5.6): a pixel
  * measures the mean of the reflected radiance over its footprint, which
  * the value at the pixel centre misses where a lobe is narrower than the
  * pixel (a sharp highlight on a sphere a few hundred pixels across). Such

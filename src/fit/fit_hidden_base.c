@@ -54,11 +54,16 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
 
   /* the film alone: the base hidden under τ at its bound */
   double params[CF_MAX_DIM], log_scale = p->log_scale, response = p->response;
-  int at_bound[FIT_MAX_FREE];
+  size_t unknowns = (size_t)p->num_unknowns;
   memcpy(params, p->params, sizeof params);
-  memcpy(at_bound, p->at_bound, sizeof at_bound);
-  double *log_exposures = malloc(p->images * sizeof *log_exposures);
-  if (!log_exposures) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  int *at_bound = malloc((unknowns ? unknowns : 1) * sizeof *at_bound);
+  double *log_exposures = malloc((p->images ? p->images : 1) * sizeof *log_exposures);
+  if (!at_bound || !log_exposures) {
+    free(at_bound);
+    free(log_exposures);
+    return cf_error_set(err, CF_ENOMEM, "out of memory");
+  }
+  memcpy(at_bound, p->at_bound, unknowns * sizeof *at_bound);
   memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
   fit_plan alone = *plan;
   double defaults[CF_MAX_DIM];
@@ -85,9 +90,10 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
     p->response = response;
     memcpy(p->log_exposures, log_exposures, p->images * sizeof *log_exposures);
     cf_status restored = fit_declare(p, plan, err);
-    memcpy(p->at_bound, at_bound, sizeof at_bound);
+    if (restored == CF_OK) memcpy(p->at_bound, at_bound, unknowns * sizeof *at_bound);
     if (s == CF_OK) s = restored;
   }
+  free(at_bound);
   free(log_exposures);
   return s;
 }

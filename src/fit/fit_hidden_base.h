@@ -24,7 +24,7 @@ typedef struct fit_hidden_base {
 /* For M4 with free base slots (albedo, σ, τ, r2, F0_2), after a solve
  * whose final cost is `cost` (½ χ² at the problem's current σ):
  *   1. the base's whole contribution at the fit, χ² of the model minus its
- *      top specular alone (MODEL.md's reduction at τ >= 400); above 100 per
+ *      top specular alone (the reduction of docs/model.md §4.5 at τ >= 400); above 100 per
  *      residual the film alone cannot explain the photos: skipped;
  *   2. else the film alone is fitted (τ held at its upper bound, where the
  *      film hides the base; the base's other slots held at their defaults)

@@ -1,11 +1,13 @@
 /* fit.json (data_schema/fit.schema.json): a fit's result as a file. */
-#include "fit_json.h"
+#include "clayfit/fit_file.h"
 
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
+
+#include "core/file.h"
 
 static json_t *numbers(const double *x, int n) {
   json_t *array = json_array();
@@ -57,7 +59,7 @@ static json_t *params_json(const cf_fit_result *r) {
   return params;
 }
 
-/* Density and absorption of M4's film under MODEL.md's convention: only
+/* Density and absorption of M4's film under docs/model.md §3.6's convention: only
  * their product τ is observable. */
 static json_t *derived_json(const cf_fit_result *r, double density) {
   if (r->model != CF_MODEL_CLAY) return json_null();
@@ -72,7 +74,8 @@ static json_t *derived_json(const cf_fit_result *r, double density) {
   } else {
     d = mean / 0.8;
     convention =
-        "the photos determine only tau = absorption x density; by MODEL.md's convention "
+        "the photos determine only tau = absorption x density; by the convention of "
+        "docs/model.md §3.6 "
         "the mean absorption over the channels is 0.8, so density = mean(tau) / 0.8";
   }
   for (int c = 0; c < 3; ++c) absorption[c] = d > 0.0 ? tau[c] / d : NAN;
@@ -203,9 +206,94 @@ static json_t *footprint_json(const cf_fit_report *rep) {
                    "largest S; the others are evaluated at the pixel centre");
 }
 
+static json_t *per_image_json(const cf_fit_report *rep) {
+  const cf_fit_result *r = rep->result;
+  json_t *per_image = json_array();
+  for (size_t k = 0; k < r->images; ++k)
+    json_array_append_new(
+        per_image,
+        json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
+                  "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
+                  r->exposures[k]));
+  return per_image;
+}
+
+static json_t *starts_json(const cf_fit_result *r) {
+  json_t *starts = json_array();
+  for (int i = 0; i < r->starts; ++i)
+    json_array_append_new(
+        starts,
+        json_pack("{s:o, s:o, s:f, s:i, s:b}", "start", params_by_name(r->model, r->start[i].start),
+                  "end", params_by_name(r->model, r->start[i].end), "cost", r->start[i].cost,
+                  "iterations", r->start[i].iterations, "stopped", r->start[i].stopped));
+  return starts;
+}
+
+static json_t *stages_json(const cf_fit_result *r) {
+  json_t *stages = json_object();
+  for (int i = 0; i < CF_FIT_STAGE_COUNT; ++i)
+    json_object_set_new(stages, cf_fit_stage_name((cf_fit_stage)i), json_real(r->stage_seconds[i]));
+  return stages;
+}
+
+static json_t *warnings_json(const cf_fit_result *r) {
+  json_t *warnings = json_array();
+  for (int i = 0; i < r->warning_count; ++i)
+    json_array_append_new(warnings, json_string(r->warnings[i]));
+  return warnings;
+}
+
+static json_t *cores_json(const cf_fit_result *r) {
+  return json_pack(
+      "{s:f, s:I, s:f, s:f, s:{s:I, s:f, s:f}, s:s}", "radius_px", CF_FIT_CORE_RADIUS_PX, "count",
+      (json_int_t)r->core_residuals, "rmse", r->core_rmse, "relative_rmse", r->core_relative_rmse,
+      "rest", "count", (json_int_t)(r->residuals - r->core_residuals), "rmse", r->rest_rmse,
+      "relative_rmse", r->rest_relative_rmse, "meaning",
+      "residuals within radius_px of each image's brightest observation (the highlight's core, "
+      "where the lobe's shape shows) and of all the others");
+}
+
+/* The sections after the first json_pack (its format has room for no more). */
+static void add_later_sections(json_t *doc, const cf_fit_report *rep,
+                               const cf_capture_summary *summary) {
+  const cf_fit_result *r = rep->result;
+  if (summary->radiometry_from_reference) /* the capture's scale from its reference */
+    json_object_set_new(
+        json_object_get(doc, "capture"), "reference",
+        json_pack("{s:f, s:f, s:I}", "scale", summary->reference_scale, "spread",
+                  summary->reference_spread, "pixels", (json_int_t)summary->reference_pixels));
+  json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
+  json_object_set_new(json_object_get(doc, "timing"), "choice_s",
+                      json_real(rep->choice ? rep->choice->seconds : 0.0));
+  json_object_set_new(doc, "footprint", footprint_json(rep));
+  json_object_set_new(doc, "sample", sample_json(r));
+  json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
+  json_object_set_new(
+      doc, "response",
+      json_pack("{s:f, s:f, s:b, s:s}", "value", r->response, "sd", r->response_sd, "fitted",
+                r->response_fitted, "meaning",
+                "the response exponent: the decoded photo values are modelled as "
+                "(scale x exposure x radiance)^value; fitted when the capture says the tone "
+                "curve is unknown, else 1"));
+}
+
+/* The capture's path relative to the folder of fit.json (data_schema/
+ * fit.schema.json, capture.path), so that report and export find it from
+ * any folder. */
+static cf_status capture_path_from(const char *fit_path, const char *capture_path, char *out,
+                                   size_t size, cf_error *err) {
+  char folder[4096];
+  cf_status s = cf_path_dirname(fit_path, folder, sizeof folder, err);
+  if (s == CF_OK) s = cf_path_relative(folder, capture_path, out, size, err);
+  return s;
+}
+
 cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error *err) {
   const cf_fit_result *r = rep->result;
   const cf_model_info *m = cf_model_info_get(r->model);
+  char capture_path[4096];
+  cf_status s = capture_path_from(path, rep->capture_path, capture_path, sizeof capture_path, err);
+  if (s != CF_OK) return s;
   cf_capture_summary summary;
   cf_capture_summarize(rep->capture, &summary);
   const cf_observations *obs = cf_capture_observations(rep->capture);
@@ -217,39 +305,12 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
 
   json_t *unconstrained, *at_bound;
   json_t *held = held_json(r, &unconstrained, &at_bound);
-  json_t *per_image = json_array();
-  for (size_t k = 0; k < r->images; ++k)
-    json_array_append_new(
-        per_image,
-        json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
-                  "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
-                  r->exposures[k]));
-  json_t *starts = json_array();
-  for (int i = 0; i < r->starts; ++i)
-    json_array_append_new(
-        starts,
-        json_pack("{s:o, s:o, s:f, s:i, s:b}", "start", params_by_name(r->model, r->start[i].start),
-                  "end", params_by_name(r->model, r->start[i].end), "cost", r->start[i].cost,
-                  "iterations", r->start[i].iterations, "stopped", r->start[i].stopped));
-  json_t *stages = json_object();
-  for (int i = 0; i < CF_FIT_STAGE_COUNT; ++i)
-    json_object_set_new(stages, cf_fit_stage_name((cf_fit_stage)i), json_real(r->stage_seconds[i]));
-  json_t *warnings = json_array();
-  for (int i = 0; i < r->warning_count; ++i)
-    json_array_append_new(warnings, json_string(r->warnings[i]));
-  json_t *cores = json_pack(
-      "{s:f, s:I, s:f, s:f, s:{s:I, s:f, s:f}, s:s}", "radius_px", CF_FIT_CORE_RADIUS_PX, "count",
-      (json_int_t)r->core_residuals, "rmse", r->core_rmse, "relative_rmse", r->core_relative_rmse,
-      "rest", "count", (json_int_t)(r->residuals - r->core_residuals), "rmse", r->rest_rmse,
-      "relative_rmse", r->rest_relative_rmse, "meaning",
-      "residuals within radius_px of each image's brightest observation (the highlight's core, "
-      "where the lobe's shape shows) and of all the others");
   json_t *doc = json_pack(
       "{s:i, s:s, s:s, s:{s:s, s:s, s:I, s:I, s:s}, s:{s:s, s:s}, s:o, s:o, s:{s:f, s:f, s:b}, "
       "s:o, s:o, s:o, s:o, s:{s:s, s:f}, s:{s:s, s:f}, s:{s:I, s:I, s:I, s:f, s:f, s:o, s:o}, "
       "s:{s:i, s:i, s:s, s:f, s:f}, s:o, s:i, s:o, s:{s:f, s:f, s:f, s:o}}",
       "clayfit_fit", 1, "clayfit_version", rep->version, "created", created, "capture", "path",
-      rep->capture_path, "name", summary.name, "images", (json_int_t)r->images, "observations",
+      capture_path, "name", summary.name, "images", (json_int_t)r->images, "observations",
       (json_int_t)obs->count, "radiometry",
       summary.radiometry_from_reference ? "from_reference"
       : summary.radiometry_relative     ? "relative"
@@ -262,33 +323,13 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
       "type", loss_names[rep->loss], "scale_sigma", rep->loss_scale, "residuals", "count",
       (json_int_t)r->residuals, "censored", (json_int_t)r->censored, "rejected",
       (json_int_t)r->rejected, "rmse", r->rmse, "relative_rmse", r->relative_rmse, "per_image",
-      per_image, "highlight_cores", cores, "solver", "iterations", r->iterations, "solves",
-      r->solves, "termination", r->termination, "seconds", r->solve_seconds, "final_cost", r->cost,
-      "starts", starts, "best_start", r->best_start, "warnings", warnings, "timing", "load_s",
-      rep->load_seconds, "fit_s", rep->fit_seconds, "total_s", rep->load_seconds + rep->fit_seconds,
-      "stages", stages);
-  if (doc && summary.radiometry_from_reference) /* the capture's scale from its reference */
-    json_object_set_new(
-        json_object_get(doc, "capture"), "reference",
-        json_pack("{s:f, s:f, s:I}", "scale", summary.reference_scale, "spread",
-                  summary.reference_spread, "pixels", (json_int_t)summary.reference_pixels));
-  if (doc) json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
-  if (doc)
-    json_object_set_new(json_object_get(doc, "timing"), "choice_s",
-                        json_real(rep->choice ? rep->choice->seconds : 0.0));
-  if (doc) json_object_set_new(doc, "footprint", footprint_json(rep));
-  if (doc) json_object_set_new(doc, "sample", sample_json(r));
-  if (doc)
-    json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
-  if (doc)
-    json_object_set_new(
-        doc, "response",
-        json_pack("{s:f, s:f, s:b, s:s}", "value", r->response, "sd", r->response_sd, "fitted",
-                  r->response_fitted, "meaning",
-                  "the response exponent: the decoded photo values are modelled as "
-                  "(scale x exposure x radiance)^value; fitted when the capture says the tone "
-                  "curve is unknown, else 1"));
+      per_image_json(rep), "highlight_cores", cores_json(r), "solver", "iterations", r->iterations,
+      "solves", r->solves, "termination", r->termination, "seconds", r->solve_seconds, "final_cost",
+      r->cost, "starts", starts_json(r), "best_start", r->best_start, "warnings", warnings_json(r),
+      "timing", "load_s", rep->load_seconds, "fit_s", rep->fit_seconds, "total_s",
+      rep->load_seconds + rep->fit_seconds, "stages", stages_json(r));
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build fit.json");
+  add_later_sections(doc, rep, &summary);
   int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0;
   json_decref(doc);
   return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;

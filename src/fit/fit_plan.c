@@ -3,13 +3,13 @@
 #include "fit_plan.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "lsq/lsq.h"
-#include "symmetric_eigen.h"
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights
- * are known only up to a factor (MODEL.md, "relative radiometry"), or −1. */
+ * are known only up to a factor (docs/model.md §5.5), or −1. */
 int fit_scale_slot(cf_model_id model) {
   switch (model) {
     case CF_MODEL_DIELECTRIC:
@@ -73,7 +73,8 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
 
 cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iterations,
                            cf_lsq_summary *summary, double *jtj, cf_error *err) {
-  double x[FIT_MAX_FREE];
+  double *x = malloc((p->num_unknowns ? (size_t)p->num_unknowns : 1) * sizeof *x);
+  if (!x) return cf_error_set(err, CF_ENOMEM, "out of memory for %d unknowns", p->num_unknowns);
   fit_problem_get_x(p, x);
   cf_lsq_problem problem;
   fit_lsq_problem(p, x, &problem);
@@ -88,9 +89,12 @@ cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iter
   options.stop = p->stop;
   options.stop_user = p->stop_user;
   options.final_jtj = jtj;
+  options.trace = o->trace;
+  options.trace_user = o->trace_user;
   cf_status s = cf_lsq_solve(&problem, &options, summary, err);
   if (s == CF_OK) p->radius = fmin(summary->final_radius, MAX_CARRIED_RADIUS);
   if (s == CF_OK) fit_problem_set_x(p, x);
+  free(x);
   if (s == CF_OK) {
     ++p->solves;
     p->iterations += summary->iterations;
@@ -105,12 +109,17 @@ cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iter
 
 cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu, double *cost,
                                cf_error *err) {
-  double x[FIT_MAX_FREE], total;
+  double total, *x = malloc((p->num_unknowns ? (size_t)p->num_unknowns : 1) * sizeof *x);
+  if (!x) return cf_error_set(err, CF_ENOMEM, "out of memory for %d unknowns", p->num_unknowns);
   fit_problem_get_x(p, x);
   cf_lsq_problem problem;
   fit_lsq_problem(p, x, &problem);
-  if (!cf_lsq_normal_equations(&problem, threads, jtj, jtu, &total))
-    return cf_error_set(err, CF_ENUMERIC, "the fit cannot be evaluated at its current values");
+  int evaluated = cf_lsq_normal_equations(&problem, threads, jtj, jtu, &total);
+  free(x);
+  if (evaluated == CF_LSQ_FAILED)
+    return cf_error_set(err, CF_ENOMEM, "out of memory evaluating the fit at its current values");
+  if (evaluated != CF_LSQ_EVALUATED)
+    return cf_error_set(err, CF_ENUMERIC, "the fit is not finite at its current values");
   if (cost) *cost = total;
   return CF_OK;
 }
@@ -133,25 +142,8 @@ int fit_pins_hold(const fit_problem *p, const double *g) {
 }
 
 double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const double *g) {
-  enum { MOST = FIT_DECREMENT_MOST };
-  int n = p->num_unknowns;
-  if (n > MOST) return HUGE_VAL;
-  double h[MOST * MOST], values[MOST], vectors[MOST * MOST];
-  int free_u[MOST], m = 0;
-  for (int u = 0; u < n; ++u)
-    if (!p->at_bound[u]) free_u[m++] = u;
-  for (int a = 0; a < m; ++a)
-    for (int b = 0; b < m; ++b) h[a * m + b] = jtj[free_u[a] * n + free_u[b]];
-  symmetric_eigen(h, m, values, vectors);
-  double largest = 0.0, sum = 0.0;
-  for (int i = 0; i < m; ++i) largest = fmax(largest, values[i]);
-  for (int i = 0; i < m; ++i) {
-    if (!(values[i] > 1e-12 * largest)) continue; /* a direction no data see */
-    double projection = 0.0;
-    for (int a = 0; a < m; ++a) projection += vectors[a * m + i] * g[free_u[a]];
-    sum += projection * projection / values[i];
-  }
-  return 0.5 * sum;
+  if (p->num_unknowns > FIT_DECREMENT_MOST) return HUGE_VAL;
+  return cf_lsq_newton_decrement(p->num_unknowns, jtj, g, p->at_bound);
 }
 
 /* With a noise model, σ from the prediction (fit_problem_reweight) and
@@ -185,13 +177,8 @@ cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const 
 
 /* The width of a model slot's range. */
 double fit_slot_width(const fit_problem *p, int slot) {
-  const cf_model_info *m = cf_model_info_get(p->model);
-  for (int j = m->param_count - 1; j >= 0; --j)
-    if (slot >= m->offsets[j]) {
-      const cf_param_info *info = cf_param_info_get(m->params[j]);
-      return info->upper - info->lower;
-    }
-  return 1.0;
+  const cf_param_info *info = cf_model_slot_param(p->model, slot, NULL);
+  return info ? info->upper - info->lower : 1.0;
 }
 
 void fit_progress(const cf_fit_options *o, const char *stage, size_t done, size_t total) {

@@ -19,12 +19,12 @@ typedef struct fit_plan {
 } fit_plan;
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights
- * are known only up to a factor (MODEL.md, "relative radiometry"), or −1
+ * are known only up to a factor (docs/model.md §5.5), or −1
  * for a model without one. */
 int fit_scale_slot(cf_model_id model);
 
 /* The value that slot is held at for the scale unless the user holds
- * another (MODEL.md: F0 = 0.04, an uncoated dielectric of IOR 1.5). */
+ * another (docs/model.md (42): F0 = 0.04, an uncoated dielectric of IOR 1.5). */
 #define FIT_SCALE_F0 0.04
 
 /* The plan for the options' model on this capture. */

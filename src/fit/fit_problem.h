@@ -13,8 +13,6 @@
 #include "clayfit/fit.h"
 #include "clayfit/model.h"
 
-enum { FIT_MAX_FREE = CF_MAX_DIM + 1 + 1024 }; /* model, scale, exposures */
-
 /* What the solver's entry x[i] is. Model slots are fitted as they are,
  * but the albedo, fitted as its logarithm (ρ > 0 for any real clay; the
  * bound ρ <= 1 becomes log ρ <= 0, and ρ >= 0 becomes ρ >= FIT_ALBEDO_FLOOR:
@@ -24,8 +22,8 @@ enum { FIT_MAX_FREE = CF_MAX_DIM + 1 + 1024 }; /* model, scale, exposures */
 typedef enum fit_unknown_kind {
   FIT_MODEL_SLOT,  /* params[slot] */
   FIT_SQUARE_SLOT, /* params[slot]²: the Oren-Nayar σ, whose derivative
-                     vanishes at σ = 0 (MODEL.md: "a fitter may work in
-                     σ²"); f depends on σ only through σ² */
+                     vanishes at σ = 0 (docs/model.md §6.6); f depends
+                     on σ only through σ² */
   FIT_LOG_SLOT,    /* log params[slot]: the albedo. A flash capture sees the
                       film's diffuse light nearly straight on, so it
                       determines ρ e^(−τ P) with P hardly varying: a curved
@@ -89,9 +87,15 @@ typedef struct fit_problem {
   double response;       /* γ (1: linear) */
   int response_on;       /* apply γ (it is free, or not 1) */
   double *log_exposures; /* images */
-  int num_unknowns;
-  fit_unknown unknowns[FIT_MAX_FREE];
-  double lower[FIT_MAX_FREE], upper[FIT_MAX_FREE];
+  /* the unknowns declared (fit_problem_clear_unknowns, _free_*), their
+   * bounds and, after a solve, at_bound: −1/+1 for an unknown held at its
+   * lower/upper bound by the data (lsq.h), else 0; num_unknowns each, in
+   * arrays that grow as unknowns are declared (unknown_capacity) */
+  int num_unknowns, unknown_capacity;
+  fit_unknown *unknowns;
+  double *lower, *upper;
+  int *at_bound;
+  int unknowns_failed;            /* a declaration found no memory (fit_problem_finish says so) */
   int solves, iterations;         /* tallies of fit_solve on this problem */
   double trace[CF_FIT_MAX_TRACE]; /* the costs of its solves' iterations, in order */
   int trace_count;
@@ -111,10 +115,6 @@ typedef struct fit_problem {
   /* optional: ends a solve early (lsq.h's cf_lsq_options.stop) */
   int (*stop)(void *user, const double *x, double cost);
   void *stop_user;
-  int at_bound[FIT_MAX_FREE]; /* after a solve: −1/+1 for an unknown held
-                                 at its lower/upper bound by the data
-                                 (lsq.h), else 0 */
-
   cf_loss loss;
   double loss_scale; /* in σ */
   size_t block_size; /* observations per residual block */
@@ -124,6 +124,11 @@ typedef struct fit_problem {
    * block_column_begin[b + 1]) */
   size_t *block_column_begin;
   int *block_column;
+  /* fit_problem_evaluate's working memory: a pool of scratch buffers that
+   * concurrent evaluations take (fit_problem.c), made by
+   * fit_problem_finish, grown to the problem as it grows */
+  struct fit_scratch *scratch;
+  int scratch_count;
 } fit_problem;
 
 /* The pairs of one surface point with each of `lights` lights: their
@@ -194,7 +199,9 @@ int fit_capture_has_noise(const cf_capture *capture);
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma);
 
 /* Declare the unknowns (in this order: model slots, the scale, the
- * exposures) and the blocks; call after the last. */
+ * exposures) and the blocks; call after the last. The unknowns'
+ * arrays grow as they are declared; when that fails (out of memory)
+ * fit_problem_finish returns CF_ENOMEM. */
 void fit_problem_clear_unknowns(fit_problem *p);
 void fit_problem_free_slot(fit_problem *p, int slot);
 void fit_problem_free_scale(fit_problem *p);
@@ -222,7 +229,9 @@ void fit_problem_set_x(fit_problem *p, const double *x);
 
 /* lsq.h's callback: the cost of block `block` at x, and the normal
  * equations of its Gauss-Newton model (reweighted by the loss) over the
- * block's columns. */
+ * block's columns. Returns CF_LSQ_EVALUATED, CF_LSQ_NOT_FINITE, or
+ * CF_LSQ_FAILED when it found no memory. Safe to call from several
+ * threads at once for different blocks. */
 int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
                          double *jtu);
 

@@ -1,16 +1,17 @@
 /* Reading fit.json (data_schema/fit.schema.json) back: for clayfit export
- * and clayfit report. The file is untrusted: every field is checked for its
- * type and range with the strict JSON helpers of the capture layer, every
- * object for unknown keys, and every error names the file and JSON path. */
+ * and clayfit report (include/clayfit/fit_file.h). The file is untrusted:
+ * every field is checked for its type and range with core's strict JSON
+ * reader, every object for unknown keys, and every error names the file and
+ * JSON path. */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "capture/json_reader.h"
-#include "clayfit/fit.h"
+#include "clayfit/fit_file.h"
 #include "core/file.h"
+#include "core/json_reader.h"
 
 #define FIT_FILE_MAX_SIZE ((size_t)256 << 20)
 #define HUGE_NUMBER 1e308
@@ -216,6 +217,26 @@ static cf_status read_model(const json_t *root, const json_at *at, const char *k
 
 /* ---- the sections ---- */
 
+/* capture.path is relative to fit.json's folder; a fit.json written before
+ * that rule has it relative to the folder where clayfit fit ran, taken as
+ * written (relative to the current folder) when only that exists. */
+static cf_status locate_capture(const char *written, const char *fit_path, const json_at *at,
+                                cf_fit_file *f, cf_error *err) {
+  if (strlen(written) >= sizeof f->capture_written)
+    return json_fail(at, err, CF_ERANGE, "the path is longer than %zu bytes",
+                     sizeof f->capture_written - 1);
+  memcpy(f->capture_written, written, strlen(written) + 1);
+  char folder[4096];
+  TRY(cf_path_dirname(fit_path, folder, sizeof folder, err));
+  TRY(cf_path_join(folder, written, f->capture_path, sizeof f->capture_path, err));
+  f->capture_found = cf_path_exists(f->capture_path);
+  if (!f->capture_found && written[0] != '/' && cf_path_exists(written)) {
+    memcpy(f->capture_path, written, strlen(written) + 1);
+    f->capture_found = 1;
+  }
+  return CF_OK;
+}
+
 static cf_status read_capture(const json_t *root, const json_at *at, const char *fit_path,
                               cf_fit_file *f, cf_error *err) {
   const json_t *obj;
@@ -226,18 +247,8 @@ static cf_status read_capture(const json_t *root, const json_at *at, const char 
   TRY(json_check_keys(obj, &here, known, err));
   const char *path;
   TRY(json_get_string(obj, &here, "path", 1, &path, NULL, err));
-  if (cf_path_exists(path) || path[0] == '/') {
-    if (strlen(path) >= sizeof f->capture_path) {
-      json_at p = json_member_at(&here, "path");
-      return json_fail(&p, err, CF_ERANGE, "the path is longer than %zu bytes",
-                       sizeof f->capture_path - 1);
-    }
-    memcpy(f->capture_path, path, strlen(path) + 1);
-  } else {
-    char folder[4096];
-    TRY(cf_path_dirname(fit_path, folder, sizeof folder, err));
-    TRY(cf_path_join(folder, path, f->capture_path, sizeof f->capture_path, err));
-  }
+  json_at p = json_member_at(&here, "path");
+  TRY(locate_capture(path, fit_path, &p, f, err));
   TRY(get_text(obj, &here, "name", f->capture_name, sizeof f->capture_name, err));
   size_t count;
   TRY(get_count(obj, &here, "images", &count, err));
@@ -819,6 +830,18 @@ cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err) {
   json_decref(root);
   if (s != CF_OK) cf_fit_file_free(file);
   return s;
+}
+
+cf_status cf_fit_file_check_capture(const cf_fit_file *file, const char *fit_path, cf_error *err) {
+  if (file->capture_found) return CF_OK;
+  if (file->capture_written[0] == '/')
+    return cf_error_set(err, CF_ENOTFOUND, "%s: capture.path: no capture at %s", fit_path,
+                        file->capture_path);
+  return cf_error_set(err, CF_ENOTFOUND,
+                      "%s: capture.path '%s': no capture at %s (relative to the folder of "
+                      "fit.json) nor at %s (relative to the current folder, where a fit.json "
+                      "written by an earlier clayfit has it)",
+                      fit_path, file->capture_written, file->capture_path, file->capture_written);
 }
 
 void cf_fit_file_free(cf_fit_file *file) {

@@ -7,7 +7,7 @@
 
 #include "fit_plan.h"
 #include "lsq/lsq.h"
-#include "symmetric_eigen.h"
+#include "lsq/linalg.h"
 
 /* A model slot's standard deviation from its unknown's variance:
  * dρ = ρ d log ρ; dσ = dσ² / (2σ), and at σ = 0, where σ = √σ² is not
@@ -122,7 +122,8 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
   double h[CF_MAX_DIM * CF_MAX_DIM], values[CF_MAX_DIM], vectors[CF_MAX_DIM * CF_MAX_DIM];
   int m = scaled_model_block(p, jtj, slots, h);
   if (m == 0) return CF_OK;
-  symmetric_eigen(h, m, values, vectors);
+  if (!cf_symmetric_eigen(m, h, values, vectors))
+    return cf_error_set(NULL, CF_ENUMERIC, "the normal matrix could not be decomposed");
   double largest = 0.0;
   for (int i = 0; i < m; ++i) largest = fmax(largest, values[i]);
   int weakest = 0;

@@ -85,11 +85,27 @@ typedef struct cf_lsq_options {
    * (one pass less than cf_lsq_normal_equations after it; the summary's
    * final_normal says they were written) */
   double *final_jtj;
+  /* optional: called with one line of text for every iteration of Ceres
+   * and every decision of the solve around it (to study convergence;
+   * clayfit fit --trace) */
+  void (*trace)(void *user, const char *line);
+  void *trace_user;
 } cf_lsq_options;
 
 void cf_lsq_default_options(cf_lsq_options *options);
 
 enum { CF_LSQ_TRACE = 256 };
+
+/* How a solve ended. */
+typedef enum cf_lsq_termination {
+  CF_LSQ_END_CONVERGED,         /* a tolerance was met (Ceres' CONVERGENCE) */
+  CF_LSQ_END_OUT_OF_ITERATIONS, /* max_iterations reached (NO_CONVERGENCE) */
+  CF_LSQ_END_STOPPED,           /* options->stop ended it (USER_SUCCESS) */
+  CF_LSQ_END_FAILED             /* the solve failed (FAILURE) */
+} cf_lsq_termination;
+
+/* The name fit.json records for a termination: Ceres' own. */
+const char *cf_lsq_termination_name(cf_lsq_termination termination);
 
 typedef struct cf_lsq_summary {
   double initial_cost, final_cost; /* ½ Σ r² */
@@ -99,7 +115,7 @@ typedef struct cf_lsq_summary {
   int trace_count;
   int iterations;
   int converged; /* Ceres' CONVERGENCE */
-  char termination[64];
+  cf_lsq_termination ending; /* cf_lsq_termination_name: fit.json's word */
   double seconds;
   double final_radius; /* the trust region at the end */
   int stopped;         /* options->stop ended it */
@@ -122,7 +138,10 @@ typedef struct cf_lsq_summary {
  * per block instead of m × n (for a million observations, 14 thousand
  * rows instead of 3.6 million). Eigenvalues below 1e-14 of the largest
  * are dropped (a block that does not see a parameter). Evaluations of the
- * cost alone return (0, …, 0, √(2C)).
+ * cost alone return (0, …, 0, √(2C)). A block whose JᵀJ is nearly
+ * singular loses digits in c (the sphere fit with a block per view: the
+ * cost off by 1e-11 relative, the solve 5e-8 radii short of the minimum):
+ * group the residuals so that each block sees its parameters well.
  *
  * The active set. Ceres clips a step at the box, but its model of the
  * cost change does not see the clipping: once a parameter sits at a bound
@@ -132,24 +151,39 @@ typedef struct cf_lsq_summary {
  * parameter that starts at a bound, or stays at one for two iterations, is
  * pinned there (held through a ceres::SubsetManifold) and the rest solved
  * again; at the end a pinned parameter whose gradient points back into the
- * box is released and the solve repeated (at most a few rounds). */
+ * box is released and the solve repeated (at most a few rounds).
+ *
+ * The solve runs in chunks of 8 iterations with a line search along the
+ * last step between them where the steps kept more than their model
+ * promised. What each of these devices buys, measured, is in
+ * docs/solver.md. Returns CF_ENOMEM when a block's evaluation failed
+ * (CF_LSQ_FAILED), CF_ENUMERIC when Ceres failed. */
 cf_status cf_lsq_solve(cf_lsq_problem *problem, const cf_lsq_options *options,
                        cf_lsq_summary *summary, cf_error *err);
 
 /* The normal equations summed over every block at problem->x (blocks
  * shared among `threads` threads): jtj = JᵀJ (num_params², row-major) and
  * jtu = Jᵀu (num_params; the cost's gradient), either may be NULL, and
- * *cost. Returns 0 when a block cannot be evaluated. */
+ * *cost. Returns what the blocks returned: CF_LSQ_EVALUATED, or
+ * CF_LSQ_NOT_FINITE or CF_LSQ_FAILED for the first that did not. */
 int cf_lsq_normal_equations(const cf_lsq_problem *problem, int threads, double *jtj, double *jtu,
                             double *cost);
 
-/* The covariance (JᵀJ)⁻¹ (n², row-major) of a least-squares solution from
- * its normal matrix jtj = JᵀJ (n², row-major), by ceres::Covariance
- * (DENSE_SVD) on the n × n factor R = Λ^(1/2) Vᵀ of jtj = V Λ Vᵀ: the
- * covariance depends on J only through JᵀJ, and a solution with millions
- * of residuals then costs an n × n decomposition instead of an SVD of J.
+/* How much a Gauss-Newton step from here could still lower the cost: the
+ * decrement ½ gᵀ H⁺ g over the parameters not pinned (pinned[i] == 0;
+ * pinned may be NULL), H their block of jtj (n², row-major) and H⁺ its
+ * pseudo-inverse, eigenvalues below 1e-12 of the largest dropped (a
+ * direction no data see). In the cost's units; HUGE_VAL when it cannot be
+ * computed. */
+double cf_lsq_newton_decrement(int n, const double *jtj, const double *g, const int *pinned);
+
+/* The covariance (JᵀJ)⁻¹ = V Λ⁻¹ Vᵀ (n², row-major) of a least-squares
+ * solution from its normal matrix jtj = JᵀJ = V Λ Vᵀ (n², row-major): the
+ * covariance depends on J only through JᵀJ, so a solution with millions
+ * of residuals costs an n × n eigen-decomposition instead of an SVD of J.
  * *rank_deficient is set (covariance untouched) when JᵀJ is singular to
- * within a reciprocal condition number of 1e-12. */
+ * within a reciprocal condition number of 1e-12 (the test
+ * ceres::Covariance makes with DENSE_SVD). */
 cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance, int *rank_deficient,
                             cf_error *err);
 

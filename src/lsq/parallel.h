@@ -10,10 +10,18 @@
 
 #include <stddef.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 void cf_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user);
 
 /* The items [*begin, *end) of part `part` of `parts` over `count` items in
  * order (for a cf_parallel_for over parts of one range). */
 void cf_part_range(size_t count, int parts, int part, size_t *begin, size_t *end);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* CLAYFIT_LSQ_PARALLEL_H */

@@ -1,5 +1,5 @@
 /* M4 clay: a thin absorbing film (water, oil) over the clay body
- * (MODEL.md, "M4: the two-layer clay model", steps 1-8):
+ * (docs/model.md §3.5, steps 1-8: (22)-(30)):
  *
  *   f = S(F0_1, r1; l, v) + T(c_i) T(c_o) a f_base / η1²
  *   f_base = S(F0_2, r2; l', v') + K (1 − F(F0_2, c_i'))(1 − F(F0_2, c_o')) ON(ρ, σ; l', v')

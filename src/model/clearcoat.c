@@ -1,7 +1,7 @@
-/* M3 clearcoat (MODEL.md, "The model ladder"; Burley 2012, B.2):
+/* M3 clearcoat (docs/model.md (21); Burley 2012, B.2):
  *   f = M2 + w_c · 0.25 · F(0.04, c_d) · D1(a, c_h) · Vs(0.25; c_i, c_o),
  *   a = 0.1 + (0.001 − 0.1) gloss.
- * Burley's coat adds energy on top of M2 (MODEL.md, "Energy"). */
+ * Burley's coat adds energy on top of M2 (docs/model.md §4.3). */
 #include "models.h"
 
 enum { DIM = CF_CLEARCOAT_DIM };

@@ -1,4 +1,4 @@
-/* M2 dielectric (MODEL.md, "The model ladder"):
+/* M2 dielectric (docs/model.md (20), (11)):
  *   f = S(F0, r; l, v) + (1 − F(F0, c_i))(1 − F(F0, c_o)) ON(ρ, σ; l, v),
  *   S = F(F0, c_d) D(r², c_h) V(r²; c_i, c_o). */
 #include "models.h"

@@ -4,8 +4,8 @@
 
 #include "terms.h"
 
-/* GTR1's width a = 0.1 + (0.001 − 0.1) · gloss (MODEL.md, "Building
- * blocks"), as D1 uses it. */
+/* GTR1's width a = 0.1 + (0.001 − 0.1) · gloss (docs/model.md (16)),
+ * as D1 uses it. */
 static double gtr1_width(double gloss) {
   return 0.1 + (0.001 - 0.1) * gloss;
 }

@@ -1,4 +1,4 @@
-/* M0 lambert: f = ρ/π (MODEL.md, "The model ladder"). */
+/* M0 lambert: f = ρ/π (docs/model.md (18)). */
 #include "models.h"
 
 enum { DIM = CF_LAMBERT_DIM };

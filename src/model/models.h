@@ -70,7 +70,7 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim);
 
-/* M4 taken apart (MODEL.md step 8), for tests and reports:
+/* M4 taken apart (docs/model.md (30)), for tests and reports:
  *   f_c = top + transmission · absorption_c · inv_eta2 · base_c. */
 typedef struct cf_clay_terms {
   double top;           /* S(F0_1, r1; l, v) */

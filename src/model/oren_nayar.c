@@ -1,4 +1,4 @@
-/* M1 oren_nayar: f = ON(ρ, σ; l, v) (MODEL.md, "Building blocks"). */
+/* M1 oren_nayar: f = ON(ρ, σ; l, v) (docs/model.md (19), (12)). */
 #include "models.h"
 
 void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p) {

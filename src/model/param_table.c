@@ -102,21 +102,18 @@ cf_status cf_model_param_find(cf_model_id model, const char *name, int *slot,
                       m->name, name, known);
 }
 
-/* The parameter that owns vector entry k, and the entry's channel. */
-static const cf_param_info *slot_owner(const cf_model_info *m, int k, int *channel) {
-  for (int j = m->param_count - 1; j >= 0; --j) {
-    if (k >= m->offsets[j]) {
-      *channel = k - m->offsets[j];
-      return &param_table[m->params[j]];
-    }
-  }
-  return NULL;
+const cf_param_info *cf_model_slot_param(cf_model_id model, int k, int *component) {
+  const cf_model_info *m = cf_model_info_get(model);
+  if (!m || k < 0 || k >= m->dim) return NULL;
+  int j = m->param_count - 1;
+  while (j > 0 && k < m->offsets[j]) --j; /* the last parameter starting at or before k */
+  if (component) *component = k - m->offsets[j];
+  return &param_table[m->params[j]];
 }
 
 const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size) {
-  const cf_model_info *m = cf_model_info_get(model);
   int channel = 0;
-  const cf_param_info *p = (m && k >= 0 && k < m->dim) ? slot_owner(m, k, &channel) : NULL;
+  const cf_param_info *p = cf_model_slot_param(model, k, &channel);
   if (!p)
     snprintf(buf, size, "#%d", k);
   else if (p->components == 3)
@@ -127,9 +124,7 @@ const char *cf_model_slot_name(cf_model_id model, int k, char *buf, size_t size)
 }
 
 double cf_model_slot_error(cf_model_id model, int k, double fitted, double truth) {
-  const cf_model_info *m = cf_model_info_get(model);
-  int channel = 0;
-  const cf_param_info *p = (m && k >= 0 && k < m->dim) ? slot_owner(m, k, &channel) : NULL;
+  const cf_param_info *p = cf_model_slot_param(model, k, NULL);
   if (!p) return NAN;
   return fabs(fitted - truth) / fmax(fabs(truth), p->upper - p->lower);
 }
@@ -147,8 +142,7 @@ cf_status cf_params_check(cf_model_id model, const double *params, cf_error *err
   const cf_model_info *m = cf_model_info_get(model);
   if (!m) return cf_error_set(err, CF_EINVAL, "invalid model id %d", (int)model);
   for (int k = 0; k < m->dim; ++k) {
-    int channel = 0;
-    const cf_param_info *p = slot_owner(m, k, &channel);
+    const cf_param_info *p = cf_model_slot_param(model, k, NULL);
     char name[64];
     cf_model_slot_name(model, k, name, sizeof name);
     if (!isfinite(params[k]))

@@ -1,4 +1,4 @@
-/* The building blocks of MODEL.md ("Building blocks"), one small function a
+/* The building blocks of docs/model.md §2, one small function a
  * term, each with the partial derivatives the models chain together.
  * Private to src/model. Pure C11 + libm. */
 #ifndef CLAYFIT_MODEL_TERMS_H
@@ -143,7 +143,7 @@ static inline cf_gtr1 gtr1_d(double a2, double log_a2, double sin2_h, double cos
 }
 
 /* ---- Oren-Nayar qualitative model (Oren & Nayar 1994 eq. 30; the seed's
- * eq. 17), without trigonometry (MODEL.md):
+ * eq. 17), without trigonometry (docs/model.md (12)-(14)):
  *   ON = ρ/π (A + B · max(0, l·v − c_i c_o) / max(c_i, c_o)),
  *   A = 1 − 0.5 σ²/(σ² + 0.33),  B = 0.45 σ²/(σ² + 0.09).
  * The coefficients depend on σ only; the angular factor on geometry only. */

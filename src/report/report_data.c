@@ -67,22 +67,8 @@ void report_data_free(report_data *d) {
   memset(d, 0, sizeof *d);
 }
 
-cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_fit_file *fit,
-                            const char *fit_path, cf_error *err) {
-  memset(d, 0, sizeof *d);
-  d->capture = capture;
-  d->fit = fit;
-  d->obs = cf_capture_observations(capture);
-  d->count = d->obs->count;
-  d->images = cf_capture_image_count(capture);
-  d->loss_scale = strcmp(fit->loss, "none") == 0 ? INFINITY : fit->loss_scale;
-  json_error_t parse;
-  d->doc = json_load_file(fit_path, JSON_REJECT_DUPLICATES, &parse);
-  cf_status s = check_same_capture(d, fit_path, err);
-  if (s != CF_OK) {
-    report_data_free(d);
-    return s;
-  }
+/* The arrays of the observations and the images. */
+static cf_status allocate(report_data *d, cf_error *err) {
   size_t n = d->count ? d->count : 1, k = d->images ? d->images : 1;
   d->prediction = malloc(3 * n * sizeof *d->prediction);
   d->sigma = malloc(3 * n * sizeof *d->sigma);
@@ -97,19 +83,15 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
   d->first = malloc(k * sizeof *d->first);
   d->last = calloc(k, sizeof *d->last);
   if (!d->prediction || !d->sigma || !d->residual || !d->mark || !d->half_angle || !d->view_angle ||
-      !d->censored || !d->rejected || !d->observations || !d->rms_sigma || !d->first || !d->last) {
-    report_data_free(d);
+      !d->censored || !d->rejected || !d->observations || !d->rms_sigma || !d->first || !d->last)
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", d->count);
-  }
-  cf_fit_options options;
-  cf_fit_default_options(&options, fit->result.model);
-  options.footprint = fit->footprint;
-  options.footprint_tolerance = fit->footprint_tolerance;
-  s = cf_fit_predict(capture, &fit->result, &options, d->prediction, d->sigma, err);
-  if (s != CF_OK) {
-    report_data_free(d);
-    return s;
-  }
+  return CF_OK;
+}
+
+/* Each observation's combined residual in sigma, its marks and angles;
+ * each image's range of observations, counts and RMS. */
+static cf_status residuals(report_data *d, cf_error *err) {
+  size_t k = d->images ? d->images : 1;
   const cf_observations *o = d->obs;
   for (size_t im = 0; im < d->images; ++im) d->first[im] = d->count;
   for (size_t i = 0; i < d->count; ++i) {
@@ -118,6 +100,7 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
     d->last[im] = i + 1;
   }
   double *sum2 = calloc(k, sizeof *sum2);
+  if (!sum2) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", k);
   for (size_t i = 0; i < d->count; ++i) {
     double total = 0.0;
     int used = 0;
@@ -140,10 +123,45 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
     ++d->observations[im];
     d->censored[im] += (d->mark[i] & REPORT_CENSORED) != 0;
     d->rejected[im] += (d->mark[i] & REPORT_REJECTED) != 0;
-    if (used && sum2) sum2[im] += (double)d->residual[i] * d->residual[i];
+    if (used) sum2[im] += (double)d->residual[i] * d->residual[i];
   }
-  for (size_t im = 0; im < d->images && sum2; ++im)
+  for (size_t im = 0; im < d->images; ++im)
     d->rms_sigma[im] = d->observations[im] ? sqrt(sum2[im] / d->observations[im]) : 0.0;
   free(sum2);
   return CF_OK;
+}
+
+cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_fit_file *fit,
+                            const char *fit_path, cf_error *err) {
+  memset(d, 0, sizeof *d);
+  d->capture = capture;
+  d->fit = fit;
+  d->obs = cf_capture_observations(capture);
+  d->count = d->obs->count;
+  d->images = cf_capture_image_count(capture);
+  d->loss_scale = strcmp(fit->loss, "none") == 0 ? INFINITY : fit->loss_scale;
+  json_error_t parse;
+  d->doc = json_load_file(fit_path, JSON_REJECT_DUPLICATES, &parse);
+  cf_status s = check_same_capture(d, fit_path, err);
+  if (s != CF_OK) {
+    report_data_free(d);
+    return s;
+  }
+  s = allocate(d, err);
+  if (s != CF_OK) {
+    report_data_free(d);
+    return s;
+  }
+  cf_fit_options options;
+  cf_fit_default_options(&options, fit->result.model);
+  options.footprint = fit->footprint;
+  options.footprint_tolerance = fit->footprint_tolerance;
+  s = cf_fit_predict(capture, &fit->result, &options, d->prediction, d->sigma, err);
+  if (s != CF_OK) {
+    report_data_free(d);
+    return s;
+  }
+  s = residuals(d, err);
+  if (s != CF_OK) report_data_free(d);
+  return s;
 }

@@ -58,9 +58,7 @@ static void parameter_table(FILE *f, const report_data *d) {
   for (int k = 0; k < m->dim; ++k) {
     char name[48];
     cf_model_slot_name(r->model, k, name, sizeof name);
-    const char *unit = "1";
-    for (int j = 0; j < m->param_count; ++j)
-      if (k >= m->offsets[j]) unit = cf_param_info_get(m->params[j])->unit;
+    const char *unit = cf_model_slot_param(r->model, k, NULL)->unit;
     char sd[48];
     if (isfinite(r->sd[k]))
       snprintf(sd, sizeof sd, "&plusmn; %.3g", r->sd[k]);

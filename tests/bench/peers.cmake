@@ -10,7 +10,8 @@ add_test(NAME bench_peers_synth COMMAND ${CLAYFIT} --quiet synth -o ${PEERS_CAPT
 set_tests_properties(bench_peers_synth PROPERTIES LABELS bench FIXTURES_SETUP bench_peers)
 add_test(NAME bench_peers_ceres
          COMMAND $<TARGET_FILE:clayfit-peers> ${PEERS_CAPTURE}/capture.json --model M2
-                 --peers autodiff,numeric --start-from-truth ${PEERS_CAPTURE}/truth.json --check)
+                 --peers autodiff,numeric,analytic --start-from-truth ${PEERS_CAPTURE}/truth.json
+                 --check)
 set_tests_properties(bench_peers_ceres PROPERTIES LABELS bench FIXTURES_REQUIRED bench_peers)
 add_test(NAME bench_peers_scipy
          COMMAND sh -c "'${CLAYFIT_PYTHON}' -c 'import numpy, scipy' 2>/dev/null || { echo 'skipped: python3-scipy is not installed'; exit 77; }; exec \"$0\" \"$@\""

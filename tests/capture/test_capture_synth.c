@@ -1,8 +1,8 @@
 /* The capture pipeline end to end on a synthetic capture: clayfit synth
  * renders an exact scene (float EXR, no noise, one sample per pixel), the
  * capture loader reads it back through COLMAP's text model, OpenImageIO,
- * the sphere and the flash, and every observation must equal MODEL.md's
- * image formation L = f(n, l, v) E c_i at its pixel centre. This checks the
+ * the sphere and the flash, and every observation must equal docs/model.md's
+ * image formation (5) L = f(n, l, v) E c_i at its pixel centre. This checks the
  * poses, the camera model, the ray-sphere geometry, the flash's position,
  * the decoding and the lights all at once. Then, with 3 x 3 samples per
  * pixel, the observations differ from the centre value only by the

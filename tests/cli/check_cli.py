@@ -1,19 +1,25 @@
 #!/usr/bin/env python3
 """Run one clayfit command and check what it did.
 
-usage: check_cli.py [--exit N] [--stderr REGEX] [--schema FILE]
+usage: check_cli.py [--exit N] [--stderr REGEX] [--stdout REGEX]
+                    [--stdout-not REGEX] [--cwd DIR] [--schema FILE]
                     [--json-file PATH] [--expect PYTHON_EXPRESSION]
                     -- COMMAND ARGS...
 
 --exit     the exit status the command must return (default 0)
 --stderr   a regular expression stderr must contain
+--stdout   a regular expression stdout must contain (repeatable)
+--stdout-not  a regular expression stdout must not contain (repeatable)
+--cwd      the folder the command runs in (default: the current one)
 --schema   stdout must be JSON valid against this JSON Schema (2020-12)
 --json-file  the JSON to check is this file (written by the command), not stdout
---expect   a Python expression over `doc` (stdout's JSON) that must be true
+--expect   a Python expression over `doc` (stdout's JSON), with math and os, that
+           must be true
 """
 import argparse
 import json
 import math  # noqa: F401  (for --expect expressions)
+import os  # noqa: F401  (for --expect expressions)
 import re
 import subprocess
 import sys
@@ -25,18 +31,27 @@ def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--exit", type=int, default=0)
     parser.add_argument("--stderr")
+    parser.add_argument("--stdout", action="append", default=[])
+    parser.add_argument("--stdout-not", action="append", default=[])
+    parser.add_argument("--cwd")
     parser.add_argument("--schema")
     parser.add_argument("--json-file")
     parser.add_argument("--expect", action="append", default=[])
     parser.add_argument("command", nargs=argparse.REMAINDER)
     args = parser.parse_args()
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
-    result = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=args.cwd)
     failures = []
     if result.returncode != args.exit:
         failures.append(f"exit status {result.returncode}, expected {args.exit}")
     if args.stderr and not re.search(args.stderr, result.stderr):
         failures.append(f"stderr does not match /{args.stderr}/")
+    for pattern in args.stdout:
+        if not re.search(pattern, result.stdout):
+            failures.append(f"stdout does not match /{pattern}/")
+    for pattern in args.stdout_not:
+        if re.search(pattern, result.stdout):
+            failures.append(f"stdout matches /{pattern}/")
     if result.returncode < 0 or "Sanitizer" in result.stderr:
         failures.append("the command crashed or a sanitizer reported an error")
     doc = None
@@ -57,10 +72,12 @@ def main() -> int:
             failures.append(f"schema: {'/'.join(map(str, error.path))}: {error.message}")
     if doc is not None:
         for expression in args.expect:
-            if not eval(expression, {"doc": doc, "math": math}):  # noqa: S307
+            if not eval(expression, {"doc": doc, "math": math, "os": os}):  # noqa: S307
                 failures.append(f"expectation failed: {expression}")
     print("$", " ".join(command))
     print("exit", result.returncode)
+    if args.stdout or args.stdout_not:
+        print("stdout:", result.stdout.strip()[:2000])
     if result.stderr:
         print("stderr:", result.stderr.strip()[:2000])
     for failure in failures:

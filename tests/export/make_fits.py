@@ -39,7 +39,7 @@ def fit_json(model, values):
     if model["code"] == "M4":
         tau = values["optical_depth"]
         d = sum(tau) / 3 / 0.8
-        derived = {"density": d, "convention": "mean absorption 0.8 (MODEL.md)",
+        derived = {"density": d, "convention": "mean absorption 0.8 (docs/model.md §3.6)",
                    "absorption": [t / d for t in tau]}
     n = len(slots)
     start = {k: v for k, v in values.items()}

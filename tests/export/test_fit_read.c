@@ -1,15 +1,20 @@
 /* cf_fit_file_read: a fit written by cf_fit_write_json and read back gives
  * the same values (M4 with per-channel statuses, a null standard deviation
  * at a bound, an unconstrained slot; M0 with derived null); a broken
- * fit.json is refused with the file and the JSON path in the message. */
+ * fit.json is refused with the file and the JSON path in the message. The
+ * capture is recorded relative to fit.json's folder and found from there;
+ * an older fit.json's path, relative to the current folder, still is. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "clayfit/fit.h"
-#include "fit/fit_json.h"
+#include "clayfit/fit_file.h"
+#include "core/file.h"
 #include "fit/fit_support.h"
 #include "support/check.h"
 
@@ -104,9 +109,10 @@ static void round_trip(const cf_capture *capture, const char *dir, cf_model_id m
   make_result(&r, model, cf_capture_image_count(capture));
   char path[600];
   snprintf(path, sizeof path, "%s/%s.fit.json", dir, m->code);
-  cf_fit_report rep = {
-      capture, "no/such/capture.json", &r, NULL, "9.9.9", CF_LOSS_CAUCHY, 2.5, NAN, 1.0, 2.0, 3,
-      0.004};
+  char capture_path[600];
+  snprintf(capture_path, sizeof capture_path, "%s/capture/capture.json", dir);
+  cf_fit_report rep = {capture, capture_path, &r,  NULL, "9.9.9", CF_LOSS_CAUCHY,
+                       2.5,     NAN,          1.0, 2.0,  3,       0.004};
   cf_error err = {0};
   CHECK(cf_fit_write_json(path, &rep, &err) == CF_OK, "%s", err.message);
   cf_fit_file f;
@@ -154,9 +160,10 @@ static void round_trip(const cf_capture *capture, const char *dir, cf_model_id m
         "%s: sample %zu of %zu", m->code, g->sample_count, g->population_count);
   CHECK(strcmp(f.clayfit_version, "9.9.9") == 0, "version '%s'", f.clayfit_version);
   CHECK(strlen(f.created) == 20, "created '%s'", f.created);
-  char expected[700];
-  snprintf(expected, sizeof expected, "%s/no/such/capture.json", dir);
-  CHECK(strcmp(f.capture_path, expected) == 0, "capture_path '%s'", f.capture_path);
+  CHECK(strcmp(f.capture_written, "capture/capture.json") == 0, "capture.path '%s'",
+        f.capture_written);
+  CHECK(strcmp(f.capture_path, capture_path) == 0 && f.capture_found, "capture_path '%s'",
+        f.capture_path);
   CHECK(strcmp(f.radiometry, "absolute") == 0, "radiometry '%s'", f.radiometry);
   CHECK(strcmp(f.loss, "cauchy") == 0 && f.loss_scale == 2.5, "loss '%s'", f.loss);
   if (model == CF_MODEL_CLAY) {
@@ -205,6 +212,63 @@ static void refused(const char *dir, const char *from, const char *to, const cha
         "'%s' -> '%s': message '%s' lacks '%s'", from, to, err.message, message);
 }
 
+/* cf_path_relative between real folders. */
+static void relative_paths(const char *dir) {
+  char from[600], target[600], out[600];
+  cf_error err = {0};
+  snprintf(from, sizeof from, "%s/old", dir);
+  snprintf(target, sizeof target, "%s/capture/capture.json", dir);
+  CHECK(cf_path_relative(from, target, out, sizeof out, &err) == CF_OK &&
+            strcmp(out, "../capture/capture.json") == 0,
+        "'%s' %s", out, err.message);
+  CHECK(cf_path_relative(dir, target, out, sizeof out, &err) == CF_OK &&
+            strcmp(out, "capture/capture.json") == 0,
+        "'%s' %s", out, err.message);
+  snprintf(from, sizeof from, "%s/old/", dir);
+  CHECK(cf_path_relative(from, target, out, sizeof out, &err) == CF_OK &&
+            strcmp(out, "../capture/capture.json") == 0,
+        "trailing slash: '%s' %s", out, err.message);
+  CHECK(cf_path_relative("/", target, out, sizeof out, &err) == CF_OK && out[0] != '/' &&
+            strstr(out, "capture/capture.json") != NULL,
+        "from /: '%s' %s", out, err.message);
+  snprintf(target, sizeof target, "%s/capturex/capture.json", dir);
+  CHECK(cf_path_relative(dir, target, out, sizeof out, &err) == CF_ENOTFOUND,
+        "a missing folder: '%s'", out);
+}
+
+/* A fit.json as clayfit wrote it before capture.path was relative to its
+ * folder: the path relative to the folder clayfit fit ran in (dir). Found
+ * there when the current folder is that one; otherwise not found, and the
+ * message names both places. */
+static void older_fit(const char *dir) {
+  char in[600], out[600], cwd[4096];
+  snprintf(in, sizeof in, "%s/M2.fit.json", dir);
+  snprintf(out, sizeof out, "%s/old/fit.json", dir);
+  CHECK(edit(in, out, "\"clayfit_fit\": 1", "\"clayfit_fit\": 1"), "could not copy %s", in);
+  CHECK(getcwd(cwd, sizeof cwd) != NULL, "getcwd");
+  cf_fit_file f;
+  cf_error err = {0};
+  CHECK(chdir(dir) == 0, "chdir %s", dir);
+  CHECK(cf_fit_file_read(out, &f, &err) == CF_OK, "%s", err.message);
+  CHECK(f.capture_found && strcmp(f.capture_path, "capture/capture.json") == 0,
+        "from the fit's folder: '%s'", f.capture_path);
+  CHECK(cf_fit_file_check_capture(&f, out, &err) == CF_OK, "%s", err.message);
+  cf_fit_file_free(&f);
+  CHECK(chdir("/") == 0, "chdir /");
+  CHECK(cf_fit_file_read(out, &f, &err) == CF_OK, "%s", err.message);
+  char expected[700];
+  snprintf(expected, sizeof expected, "%s/old/capture/capture.json", dir);
+  CHECK(!f.capture_found && strcmp(f.capture_path, expected) == 0, "elsewhere: '%s'",
+        f.capture_path);
+  CHECK(cf_fit_file_check_capture(&f, out, &err) == CF_ENOTFOUND &&
+            strstr(err.message, expected) != NULL &&
+            strstr(err.message, "nor at capture/capture.json (relative to the current folder") !=
+                NULL,
+        "message '%s'", err.message);
+  cf_fit_file_free(&f);
+  CHECK(chdir(cwd) == 0, "chdir %s", cwd);
+}
+
 int main(void) {
   char dir[64];
   if (!fit_test_make_dir(dir, sizeof dir)) return 1;
@@ -220,6 +284,11 @@ int main(void) {
   if (!capture) return check_finish("test_fit_read");
   for (int m = 0; m < CF_MODEL_COUNT; ++m) round_trip(capture, dir, (cf_model_id)m);
   cf_capture_free(capture);
+  char old[600];
+  snprintf(old, sizeof old, "%s/old", dir);
+  CHECK(mkdir(old, 0777) == 0, "mkdir %s", old);
+  relative_paths(dir);
+  older_fit(dir);
 
   refused(dir, "\"clayfit_fit\": 1", "\"clayfit_fit\": \"1\"", "clayfit_fit: expected an integer");
   refused(dir, "\"scale\": {", "\"scale\": {\"bogus\": 1, ", "scale: unknown key 'bogus'");

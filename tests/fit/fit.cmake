@@ -126,3 +126,28 @@ clayfit_c_test(test_lsq_newton_start SOURCES fit/test_lsq_newton_start.c LIBS cl
 target_include_directories(test_lsq_newton_start PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 clayfit_c_test(test_lsq_extrapolate SOURCES fit/test_lsq_extrapolate.c LIBS clayfit_fit LABELS fit)
 target_include_directories(test_lsq_extrapolate PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
+# The fit's problem (private to src/fit): any number of unknowns, a block's
+# evaluation the same on many threads at once, its cost that of the
+# predictions, the slot lookup (cf_model_slot_param).
+clayfit_c_test(test_fit_problem SOURCES fit/test_fit_problem.c LIBS clayfit_fit_test_support
+               LABELS fit)
+target_include_directories(test_fit_problem PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
+# More images than the fit's unknowns once had room for (1036), exposures
+# fitted: M0 rendered without noise, so every exposure is 1 and the albedo
+# 0.5 (the fit crashed or returned garbage; issue 15). About 15 s.
+set(FIT_MANY ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_many_images)
+add_test(NAME cli_fit_many_images_synth COMMAND ${CLAYFIT} --quiet synth -o ${FIT_MANY}
+         --model M0 --no-noise --images 1040 --size 48x36 --supersample 1)
+set_tests_properties(cli_fit_many_images_synth PROPERTIES LABELS "cli;fit;slow"
+                     FIXTURES_SETUP fit_many_images)
+clayfit_cli_test(fit_many_images_exposures --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_MANY}/fit/fit.json
+  --expect "doc['solver']['termination'] == 'CONVERGENCE'"
+  --expect "len(doc['residuals']['per_image']) == 1040"
+  --expect "all(abs(i['exposure'] - 1) < 3e-3 for i in doc['residuals']['per_image'])"
+  --expect "abs(sum(math.log(i['exposure']) for i in doc['residuals']['per_image'])) < 1e-9"
+  --expect "all(abs(a - 0.5) < 2e-3 for a in doc['params']['albedo']['value'])"
+  -- ${CLAYFIT} --quiet fit ${FIT_MANY}/capture.json -o ${FIT_MANY}/fit --model M0 --fit-exposures
+     --no-multistart)
+set_tests_properties(cli_fit_many_images_exposures PROPERTIES LABELS "cli;fit;slow"
+                     FIXTURES_REQUIRED fit_many_images)

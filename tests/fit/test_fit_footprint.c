@@ -1,4 +1,4 @@
-/* Pixel footprints (MODEL.md, "Image formation"): an M2 sphere about 120
+/* Pixel footprints (docs/model.md §5.6): an M2 sphere about 120
  * pixels across with roughness 0.08 (α = 0.0064: the highlight's lobe is
  * narrower than a pixel, across which the normal turns by about 0.017 rad),
  * noise-free.

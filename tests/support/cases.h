@@ -1,7 +1,7 @@
 /* Test cases shared by the evaluator tests: random in-range parameters,
  * random and grazing directions, the grid of hard cases, and a finite-
- * difference gradient following MODEL.md ("Properties every model must
- * satisfy"). */
+ * difference gradient following docs/model.md §4 (the properties every
+ * model must satisfy). */
 #ifndef CLAYFIT_TEST_CASES_H
 #define CLAYFIT_TEST_CASES_H
 
@@ -36,7 +36,7 @@ size_t hard_geometries(double (*n)[3], double (*l)[3], double (*v)[3], size_t ma
 long for_each_extreme_params(cf_model_id model, void (*visit)(const double *params, void *user),
                              void *user);
 
-/* MODEL.md's finite difference of f_c in parameter k: step
+/* The finite difference of docs/model.md (34) of f_c in parameter k: step
  * h = 1e-6 max(|x|, 1), central inside the range, one-sided (second
  * order) where a step would leave it. *one_sided tells which was used.
  * quotient[c] = max over the stencil's points x_j of |f(x_j) − f(x)| / h:

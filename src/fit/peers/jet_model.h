@@ -1,5 +1,5 @@
 // M2 (dielectric) and M4 (clay) written a second time, straight from
-// MODEL.md's vector formulas (half vectors, refracted direction vectors
+// the vector formulas of docs/model.md §3 (half vectors, refracted direction vectors
 // l', v', the textbook forms of D and ON), templated on the scalar so that
 // ceres::Jet differentiates them (forward-mode automatic differentiation)
 // and ceres::NumericDiffCostFunction evaluates them in double. Independent
@@ -30,7 +30,7 @@ auto Dot(const Vec3<T> &a, const Vec3<U> &b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
-// Schlick (MODEL.md "Building blocks"), c clamped to [0, 1].
+// Schlick (docs/model.md (8)), c clamped to [0, 1].
 template <typename T, typename C>
 T Fresnel(const T &f0, C c) {
   if (c > C(1.0)) c = C(1.0);
@@ -75,7 +75,7 @@ T OrenNayar(const T &rho, const T &sigma, const Vec3<C> &n, const Vec3<C> &l, co
   return rho / kPi * (a + b * angular);
 }
 
-// MODEL.md's ladder, M2: S(F0, r) + (1 − F(F0, c_i))(1 − F(F0, c_o)) ON(ρ, σ).
+// docs/model.md (20), M2: S(F0, r) + (1 − F(F0, c_i))(1 − F(F0, c_o)) ON(ρ, σ).
 template <typename T>
 void Dielectric(const T *p, const Vec3<double> &n, const Vec3<double> &l, const Vec3<double> &v,
                 T f[3]) {
@@ -88,7 +88,7 @@ void Dielectric(const T *p, const Vec3<double> &n, const Vec3<double> &l, const 
     f[c] = specular + transmission * OrenNayar(p[CF_DIELECTRIC_ALBEDO + c], sigma, n, l, v);
 }
 
-// MODEL.md "M4: the two-layer clay model", steps 1-8, in vectors.
+// docs/model.md §3.5, M4's steps 1-8 ((22)-(30)), in vectors.
 template <typename T>
 void Clay(const T *p, const Vec3<double> &n, const Vec3<double> &l, const Vec3<double> &v, T f[3]) {
   using std::exp;

@@ -2,12 +2,13 @@
 // in the same run (issue 6). The common problem: the capture's lit,
 // unclipped observations (optionally an even subsample), unweighted least
 // squares on linear RGB, residual Σ_j f(n, l_j, v) E_j c_i,j − y per
-// channel, every parameter of the model free within MODEL.md's bounds, one
+// channel, every parameter of the model free within its bounds (docs/model.md §1.6), one
 // start, Levenberg-Marquardt (SciPy: trf) with the same tolerances.
 // Contestants: clayfit (fit_problem over lsq.h), Ceres with
 // AutoDiffCostFunction and NumericDiffCostFunction (CENTRAL) over the
-// templated model (jet_model.h), one residual block per observation, and
-// SciPy's least_squares over a vectorised NumPy model
+// templated model (jet_model.h) and with the C evaluator's analytic
+// derivatives (ObservationAnalytic), one residual block per observation,
+// and SciPy's least_squares over a vectorised NumPy model
 // (scripts/peer_scipy.py). Every contestant's final parameters are costed
 // again by the C evaluator, so that the costs compared are one definition.
 // Times are reported, never asserted. No exception escapes main.
@@ -46,7 +47,7 @@ struct Options {
   cf_model_id model = CF_MODEL_DIELECTRIC;
   size_t max_obs = 0;
   int threads = 2, max_iterations = 100;
-  bool autodiff = true, numeric = true, scipy = true, check = false;
+  bool autodiff = true, numeric = true, analytic = true, scipy = true, check = false;
 };
 
 // The common problem's data, one observation after another.
@@ -99,6 +100,47 @@ struct ObservationResidual {
   }
 };
 
+// One observation's three residuals with the C evaluator's analytic
+// derivatives: the idiomatic Ceres layout (one residual block per
+// observation, Ceres forming J) around clayfit's own model, so that the
+// only difference from clayfit is the layout of the problem (clayfit hands
+// Ceres each block of a thousand observations compressed to its normal
+// equations, src/lsq/lsq.h).
+class ObservationAnalytic final : public ceres::CostFunction {
+ public:
+  ObservationAnalytic(const Data *d, size_t i) : d_(d), i_(i) {
+    set_num_residuals(3);
+    mutable_parameter_block_sizes()->push_back(d->dim);
+  }
+  bool Evaluate(double const *const *parameters, double *residuals,
+                double **jacobians) const override {
+    const Data &d = *d_;
+    const double *n = &d.n[3 * i_], *v = &d.v[3 * i_], *p = parameters[0];
+    double *jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
+    for (int c = 0; c < 3; ++c) residuals[c] = -d.y[3 * i_ + c];
+    if (jacobian != nullptr) std::fill(jacobian, jacobian + 3 * d.dim, 0.0);
+    std::vector<double> grad(3 * static_cast<size_t>(d.dim));
+    for (int j = 0; j < d.lights; ++j) {
+      const double *l = &d.l[3 * (i_ * d.lights + j)], *e = &d.e[3 * (i_ * d.lights + j)];
+      const double c_i = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
+      if (!(c_i > 0.0) || (e[0] == 0.0 && e[1] == 0.0 && e[2] == 0.0)) continue;
+      double f[3];
+      if (cf_eval(d.model, p, n, l, v, f, jacobian != nullptr ? grad.data() : nullptr) != CF_OK)
+        return false;
+      for (int c = 0; c < 3; ++c) {
+        residuals[c] += f[c] * (e[c] * c_i);
+        if (jacobian == nullptr) continue;
+        for (int k = 0; k < d.dim; ++k) jacobian[c * d.dim + k] += grad[c * d.dim + k] * (e[c] * c_i);
+      }
+    }
+    return true;
+  }
+
+ private:
+  const Data *d_;
+  size_t i_;
+};
+
 void QuietGlog() {
   static bool done = false;
   if (!done) {
@@ -108,9 +150,13 @@ void QuietGlog() {
   }
 }
 
-template <int Dim, bool Numeric>
+enum class Derivatives { kAuto, kNumeric, kAnalytic };
+
+template <int Dim, Derivatives How>
 ceres::CostFunction *MakeCost(const Data *d, size_t i) {
-  if constexpr (Numeric)
+  if constexpr (How == Derivatives::kAnalytic)
+    return new ObservationAnalytic(d, i);
+  else if constexpr (How == Derivatives::kNumeric)
     return new ceres::NumericDiffCostFunction<ObservationResidual, ceres::CENTRAL, 3, Dim>(
         new ObservationResidual{d, i});
   else
@@ -118,14 +164,14 @@ ceres::CostFunction *MakeCost(const Data *d, size_t i) {
         new ObservationResidual{d, i});
 }
 
-template <int Dim, bool Numeric>
+template <int Dim, Derivatives How>
 void SolveCeres(const Data &d, const std::vector<double> &start, const Options &o, Outcome *out) {
   QuietGlog();
   double t0 = peers_now();
   std::vector<double> x = start;
   ceres::Problem problem;
   for (size_t i = 0; i < d.count; ++i)
-    problem.AddResidualBlock(MakeCost<Dim, Numeric>(&d, i), nullptr, x.data());
+    problem.AddResidualBlock(MakeCost<Dim, How>(&d, i), nullptr, x.data());
   for (int k = 0; k < Dim; ++k) {
     problem.SetParameterLowerBound(x.data(), k, d.lower[k]);
     problem.SetParameterUpperBound(x.data(), k, d.upper[k]);
@@ -153,19 +199,25 @@ void SolveCeres(const Data &d, const std::vector<double> &start, const Options &
   out->params = x;
 }
 
-void SolveCeresFor(const Data &d, const std::vector<double> &start, const Options &o, bool numeric,
-                   Outcome *out) {
-  if (d.model == CF_MODEL_DIELECTRIC) {
-    if (numeric)
-      SolveCeres<CF_DIELECTRIC_DIM, true>(d, start, o, out);
-    else
-      SolveCeres<CF_DIELECTRIC_DIM, false>(d, start, o, out);
-  } else {
-    if (numeric)
-      SolveCeres<CF_CLAY_DIM, true>(d, start, o, out);
-    else
-      SolveCeres<CF_CLAY_DIM, false>(d, start, o, out);
+template <int Dim>
+void SolveCeresHow(const Data &d, const std::vector<double> &start, const Options &o,
+                   Derivatives how, Outcome *out) {
+  switch (how) {
+    case Derivatives::kAuto:
+      return SolveCeres<Dim, Derivatives::kAuto>(d, start, o, out);
+    case Derivatives::kNumeric:
+      return SolveCeres<Dim, Derivatives::kNumeric>(d, start, o, out);
+    case Derivatives::kAnalytic:
+      return SolveCeres<Dim, Derivatives::kAnalytic>(d, start, o, out);
   }
+}
+
+void SolveCeresFor(const Data &d, const std::vector<double> &start, const Options &o,
+                   Derivatives how, Outcome *out) {
+  if (d.model == CF_MODEL_DIELECTRIC)
+    SolveCeresHow<CF_DIELECTRIC_DIM>(d, start, o, how, out);
+  else
+    SolveCeresHow<CF_CLAY_DIM>(d, start, o, how, out);
 }
 
 // Relative difference of a prediction from the C evaluator's, against the
@@ -314,9 +366,10 @@ int Usage(FILE *f) {
                "                     [--threads T] [--max-iterations N] [--peers LIST]\n"
                "                     [--scipy-script PATH] [--python PY] [--work DIR] [--check]\n"
                "                     [--start-from-truth TRUTH.json [--perturb D]]\n\n"
-               "clayfit's fit against Ceres AutoDiff, Ceres NumericDiff (CENTRAL) and SciPy's\n"
-               "least_squares on the same observations (issue 6). LIST: a comma-separated\n"
-               "subset of autodiff,numeric,scipy (default all). --check: exit 1 unless every\n"
+               "clayfit's fit against Ceres AutoDiff, Ceres NumericDiff (CENTRAL), Ceres with\n"
+               "the C evaluator's analytic derivatives (one residual block per observation)\n"
+               "and SciPy's least_squares on the same observations (issue 6). LIST: a\n"
+               "comma-separated subset of autodiff,numeric,analytic,scipy (default all). --check: exit 1 unless every\n"
                "peer that ran reached clayfit's cost within %g relative (or better).\n"
                "Exit 1 whenever a peer's model disagrees with the C evaluator beyond %g.\n"
                "The start: the model's defaults, sigma 0.3, the albedo from a closed form;\n"
@@ -377,6 +430,7 @@ bool ParseArgs(int argc, char **argv, Options *o) {
       std::string list = std::string(",") + val + ",";
       o->autodiff = list.find(",autodiff,") != std::string::npos;
       o->numeric = list.find(",numeric,") != std::string::npos;
+      o->analytic = list.find(",analytic,") != std::string::npos;
       o->scipy = list.find(",scipy,") != std::string::npos;
     } else if (a == "--check") {
       o->check = true;
@@ -536,9 +590,10 @@ int Run(int argc, char **argv) {
   // templated model (both Ceres peers) in double against the C evaluator.
   Outcome ref;
   ref.name = "clayfit";
-  Outcome ad, nd, sp;
+  Outcome ad, nd, an, sp;
   ad.name = "ceres-autodiff";
   nd.name = "ceres-numericdiff";
+  an.name = "ceres-analytic";
   sp.name = "scipy-trf";
   double templated_error = 0.0;
   for (size_t i = 0; i < d.count; ++i) {
@@ -576,8 +631,9 @@ int Run(int argc, char **argv) {
   ref.params.assign(cr.params, cr.params + d.dim);
   ref.note = cr.termination;
 
-  if (!model_failed && o.autodiff) SolveCeresFor(d, start, o, false, &ad);
-  if (!model_failed && o.numeric) SolveCeresFor(d, start, o, true, &nd);
+  if (!model_failed && o.autodiff) SolveCeresFor(d, start, o, Derivatives::kAuto, &ad);
+  if (!model_failed && o.numeric) SolveCeresFor(d, start, o, Derivatives::kNumeric, &nd);
+  if (o.analytic) SolveCeresFor(d, start, o, Derivatives::kAnalytic, &an);
   if (o.scipy) {
     SolveScipy(d, start, pred_c, o, &sp);
     if (sp.ran)
@@ -592,7 +648,7 @@ int Run(int argc, char **argv) {
     }
   }
 
-  std::vector<Outcome *> all = {&ref, &ad, &nd, &sp};
+  std::vector<Outcome *> all = {&ref, &ad, &nd, &an, &sp};
   for (Outcome *out : all)
     if (out->ran && !CostC(capture, d, out->params.data(), &out->cost, &err)) {
       std::fprintf(stderr, "clayfit-peers: %s\n", err.message);

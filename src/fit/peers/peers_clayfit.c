@@ -2,6 +2,7 @@
 #include "peers_clayfit.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -57,7 +58,8 @@ cf_status peers_clayfit_run(const cf_capture *capture, cf_model_id model, const 
     result->iterations = summary.iterations;
     result->seconds = t2 - t0;
     result->solve_seconds = t2 - t1;
-    memcpy(result->termination, summary.termination, sizeof result->termination);
+    snprintf(result->termination, sizeof result->termination, "%s",
+             cf_lsq_termination_name(summary.ending));
     /* the floor: one value + gradient pass over every pair */
     result->pairs = p.slots;
     double *f = malloc(3 * p.slots * sizeof *f);
@@ -75,18 +77,23 @@ cf_status peers_clayfit_run(const cf_capture *capture, cf_model_id model, const 
     free(grad);
     /* the callback's pass: value and normal equations, block by block */
     size_t k = (size_t)p.num_unknowns;
-    double x[FIT_MAX_FREE], *jtj = malloc((k ? k * k : 1) * sizeof *jtj);
+    double *x = malloc((k ? k : 1) * sizeof *x), *jtj = malloc((k ? k * k : 1) * sizeof *jtj);
     double *jtu = malloc((k ? k : 1) * sizeof *jtu);
-    if (s == CF_OK && (!jtj || !jtu)) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-    fit_problem_get_x(&p, x);
+    if (s == CF_OK && (!x || !jtj || !jtu)) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+    if (s == CF_OK) fit_problem_get_x(&p, x);
     result->normal_pass_seconds = HUGE_VAL;
     for (int rep = 0; s == CF_OK && rep < 5; ++rep) {
       double a = peers_now(), cost;
-      for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b)
-        if (!fit_problem_evaluate(&p, x, b, &cost, jtj, jtu))
+      for (size_t b = 0; s == CF_OK && b < p.num_blocks; ++b) {
+        int evaluated = fit_problem_evaluate(&p, x, b, &cost, jtj, jtu);
+        if (evaluated == CF_LSQ_FAILED)
+          s = cf_error_set(err, CF_ENOMEM, "out of memory evaluating block %zu", b);
+        else if (evaluated != CF_LSQ_EVALUATED)
           s = cf_error_set(err, CF_ENUMERIC, "the callback failed on block %zu", b);
+      }
       result->normal_pass_seconds = fmin(result->normal_pass_seconds, peers_now() - a);
     }
+    free(x);
     free(jtj);
     free(jtu);
   }

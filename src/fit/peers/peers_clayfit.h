@@ -36,7 +36,7 @@ typedef struct peers_clayfit_result {
 
 /* Solve the common problem: the `count` observations of index, unweighted
  * least squares on linear RGB (no loss, σ = 1, no censoring, scale and
- * exposures held at 1), every model slot free within MODEL.md's bounds,
+ * exposures held at 1), every model slot free within docs/model.md §1.6's bounds,
  * Levenberg-Marquardt from start (cf_lsq_default_options' tolerances). */
 cf_status peers_clayfit_run(const cf_capture *capture, cf_model_id model, const uint32_t *index,
                             size_t count, const double *start, int threads, int max_iterations,

@@ -1,5 +1,5 @@
 /* Strict JSON reading with path-based errors (json_reader.h). */
-#include "json_reader.h"
+#include "core/json_reader.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -3,11 +3,12 @@
  * object for keys it does not know (a typo must not be ignored silently),
  * and every error names the file and the JSON path of the value
  * ("capture.json: lights[2].intensity[1]: expected a number, got a
- * string"). Parse errors name the line and column. Private to the library:
- * shared by src/capture and the layers above it (src/fit reads fit.json back
- * with it, src/cli the json presets), never part of the public headers. */
-#ifndef CLAYFIT_CAPTURE_JSON_READER_H
-#define CLAYFIT_CAPTURE_JSON_READER_H
+ * string"). Parse errors name the line and column. In core (it needs only
+ * Jansson) so that every layer reads its files with it: src/capture the
+ * capture files, src/fit fit.json, src/export the json presets. Private to
+ * the library, never part of the public headers. */
+#ifndef CLAYFIT_CORE_JSON_READER_H
+#define CLAYFIT_CORE_JSON_READER_H
 
 #include <jansson.h>
 #include <stddef.h>
@@ -78,4 +79,4 @@ cf_status json_as_string(const json_t *value, const json_at *at, const char **ou
 /* "a string", "an object", ... for messages. */
 const char *json_type_name(const json_t *value);
 
-#endif /* CLAYFIT_CAPTURE_JSON_READER_H */
+#endif /* CLAYFIT_CORE_JSON_READER_H */

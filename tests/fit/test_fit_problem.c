@@ -1,0 +1,207 @@
+/* The fit's least-squares problem (fit_problem.h, private to src/fit):
+ *   - the unknowns' arrays hold as many unknowns as are declared (they were
+ *     fixed at 1036: a capture of more images with --fit-exposures wrote
+ *     past them, issue 15);
+ *   - a block's evaluation gives the same numbers, to the last bit, on many
+ *     threads at once (more than its pool of scratch buffers) as on one;
+ *   - its cost is the one of fit_problem_predict's predictions (one
+ *     prediction formula), with a response exponent too;
+ *   - cf_model_slot_param agrees with the model table. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clayfit/model.h"
+#include "fit_problem.h"
+#include "fit_support.h"
+#include "lsq/lsq.h"
+#include "lsq/parallel.h"
+#include "support/check.h"
+
+CHECK_MAIN_STATE;
+
+/* Every slot of every model: its owner and component from the table. */
+static void test_slot_param(void) {
+  for (int id = 0; id < CF_MODEL_COUNT; ++id) {
+    const cf_model_info *m = cf_model_info_get((cf_model_id)id);
+    for (int j = 0; j < m->param_count; ++j) {
+      const cf_param_info *owner = cf_param_info_get(m->params[j]);
+      for (int c = 0; c < owner->components; ++c) {
+        int k = m->offsets[j] + c, component = -1;
+        CHECK(cf_model_slot_param((cf_model_id)id, k, &component) == owner && component == c,
+              "%s slot %d: not %s[%d]", m->code, k, owner->name, c);
+        CHECK(cf_model_slot_param((cf_model_id)id, k, NULL) == owner, "%s slot %d", m->code, k);
+      }
+    }
+    CHECK(cf_model_slot_param((cf_model_id)id, -1, NULL) == NULL, "%s slot -1", m->code);
+    CHECK(cf_model_slot_param((cf_model_id)id, m->dim, NULL) == NULL, "%s slot dim", m->code);
+  }
+  CHECK(cf_model_slot_param(CF_MODEL_COUNT, 0, NULL) == NULL, "an invalid model");
+}
+
+/* Far more unknowns than the old arrays' 1036, each with its own bounds:
+ * every one kept (the old arrays overlapped beyond it), and the blocks
+ * built over them. */
+static void test_many_unknowns(const cf_capture *capture) {
+  enum { MANY = 2500 };
+  fit_problem p;
+  cf_error err = {0};
+  CHECK(fit_problem_init(&p, capture, CF_MODEL_LAMBERT, NULL, 0, 1, &err) == CF_OK, "init: %s",
+        err.message);
+  for (int round = 0; round < 2; ++round) { /* declared twice: the arrays kept */
+    fit_problem_clear_unknowns(&p);
+    for (int i = 0; i < MANY; ++i) fit_problem_free_slot(&p, i % 3);
+    CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+    CHECK(p.num_unknowns == MANY, "%d unknowns declared, %d kept", MANY, p.num_unknowns);
+    int kept = 1;
+    for (int i = 0; i < p.num_unknowns; ++i)
+      kept = kept && p.unknowns[i].kind == FIT_LOG_SLOT && p.unknowns[i].slot == i % 3 &&
+             p.lower[i] == log(FIT_ALBEDO_FLOOR) && p.upper[i] == 0.0 && p.at_bound[i] == 0;
+    CHECK(kept, "an unknown or its bounds overwritten");
+    size_t columns = p.block_column_begin[p.num_blocks] - p.block_column_begin[0];
+    CHECK(columns == (size_t)MANY * p.num_blocks, "%zu block columns", columns);
+  }
+  fit_problem_release(&p);
+}
+
+/* Every block's cost, JᵀJ and Jᵀu at x, for cf_parallel_for. */
+typedef struct block_job {
+  fit_problem *p;
+  const double *x;
+  size_t k; /* the most columns of a block */
+  double *cost, *jtj, *jtu;
+  int *status;
+} block_job;
+
+static void evaluate_block(void *user, int i) {
+  const block_job *job = user;
+  size_t b = (size_t)i % job->p->num_blocks;
+  job->status[i] =
+      fit_problem_evaluate(job->p, job->x, b, &job->cost[i], job->jtj + (size_t)i * job->k * job->k,
+                           job->jtu + (size_t)i * job->k);
+}
+
+/* The blocks evaluated one at a time, then REPEAT times over on THREADS
+ * threads at once: the same bits each time. */
+static void test_threads(fit_problem *p, const double *x) {
+  enum { THREADS = 24, REPEAT = 6 };
+  size_t k = (size_t)p->num_unknowns, n = p->num_blocks, calls = n * (REPEAT + 1);
+  block_job job = {p,
+                   x,
+                   k,
+                   malloc(calls * sizeof(double)),
+                   calloc(calls * k * k, sizeof(double)),
+                   calloc(calls * k, sizeof(double)),
+                   malloc(calls * sizeof(int))};
+  if (!job.cost || !job.jtj || !job.jtu || !job.status) {
+    CHECK(0, "out of memory");
+    goto done;
+  }
+  cf_parallel_for((int)n, 1, evaluate_block, &job);
+  block_job rest = job; /* calls n.. on the threads */
+  rest.cost += n, rest.jtj += n * k * k, rest.jtu += n * k, rest.status += n;
+  cf_parallel_for((int)(n * REPEAT), THREADS, evaluate_block, &rest);
+  int same = 1;
+  for (size_t i = 0; i < calls; ++i) {
+    const int *column;
+    size_t b = i % n, columns = (size_t)fit_problem_block_columns(p, b, &column);
+    CHECK(job.status[i] == CF_LSQ_EVALUATED, "call %zu (block %zu): %d", i, b, job.status[i]);
+    same =
+        same && memcmp(&job.cost[i], &job.cost[b], sizeof(double)) == 0 &&
+        memcmp(job.jtu + i * k, job.jtu + b * k, columns * sizeof(double)) == 0 &&
+        memcmp(job.jtj + i * k * k, job.jtj + b * k * k, columns * columns * sizeof(double)) == 0;
+  }
+  CHECK(same, "a block evaluated on %d threads differs from the same block on one", THREADS);
+done:
+  free(job.cost);
+  free(job.jtj);
+  free(job.jtu);
+  free(job.status);
+}
+
+/* Σ of the blocks' costs at x against ½ Σ ((μ − y)/σ)² from
+ * fit_problem_predict at the values x stands for (no loss, σ = 1, nothing
+ * censored: the synthetic capture clips nothing). */
+static void test_cost_is_prediction(fit_problem *p, const double *x, const char *what) {
+  size_t k = (size_t)p->num_unknowns, m = 3 * p->count;
+  double total = 0.0, expected = 0.0, cost;
+  double *jtj = malloc(k * k * sizeof *jtj), *jtu = malloc(k * sizeof *jtu);
+  double *prediction = malloc(m * sizeof *prediction), *measured = malloc(m * sizeof *measured);
+  cf_error err = {0};
+  if (!jtj || !jtu || !prediction || !measured) {
+    CHECK(0, "out of memory");
+    goto done;
+  }
+  for (size_t b = 0; b < p->num_blocks; ++b) {
+    CHECK(fit_problem_evaluate(p, x, b, &cost, b % 2 ? jtj : NULL, jtu) == CF_LSQ_EVALUATED,
+          "%s: block %zu", what, b);
+    total += cost;
+  }
+  fit_problem_set_x(p, x);
+  CHECK(fit_problem_predict(p, prediction, measured, &err) == CF_OK, "%s: %s", what, err.message);
+  for (size_t i = 0; i < m; ++i)
+    expected += 0.5 * (prediction[i] - measured[i]) * (prediction[i] - measured[i]);
+  CHECK(fabs(total - expected) <= 1e-9 * expected, "%s: cost %.17g, from the predictions %.17g",
+        what, total, expected);
+done:
+  free(jtj);
+  free(jtu);
+  free(prediction);
+  free(measured);
+}
+
+/* M2 with every slot, the scale and the exposures free, a little off the
+ * truth (and again with a response exponent). */
+static void test_evaluate(const cf_capture *capture) {
+  fit_problem p;
+  cf_error err = {0};
+  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
+    CHECK(0, "init: %s", err.message);
+    return;
+  }
+  fit_problem_set_sigma(&p, capture, 1.0);
+  p.loss = CF_LOSS_NONE;
+  p.block_size = 256; /* blocks of one image, and of two */
+  fit_problem_clear_unknowns(&p);
+  for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
+  fit_problem_free_scale(&p);
+  fit_problem_free_exposures(&p);
+  CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+  double x[64];
+  CHECK(p.num_unknowns <= 64, "%d unknowns", p.num_unknowns);
+  fit_problem_get_x(&p, x);
+  for (int u = 0; u < p.num_unknowns; ++u) x[u] += 0.01 * (u % 5 - 2); /* inside the bounds */
+  test_threads(&p, x);
+  test_cost_is_prediction(&p, x, "linear");
+  p.response = 0.8;
+  fit_problem_clear_unknowns(&p);
+  for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
+  fit_problem_free_response(&p);
+  CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+  fit_problem_get_x(&p, x);
+  test_threads(&p, x);
+  test_cost_is_prediction(&p, x, "with a response exponent");
+  fit_problem_release(&p);
+}
+
+int main(void) {
+  test_slot_param();
+  char dir[64];
+  if (!fit_test_make_dir(dir, sizeof dir)) return 1;
+  double params[CF_MAX_DIM] = {0.6, 0.4, 0.3, 0.3, 0.3, 0.05};
+  cf_synth_options o;
+  fit_test_synth_options(&o, CF_MODEL_DIELECTRIC, params);
+  o.images = 4;
+  o.width = 80;
+  o.height = 60;
+  o.focal_px = 100.0;
+  o.read_noise = o.shot_noise = 0.0;
+  cf_capture *capture = fit_test_capture(dir, "m2", &o);
+  if (capture) {
+    test_many_unknowns(capture);
+    test_evaluate(capture);
+    cf_capture_free(capture);
+  }
+  fit_test_remove_dir(dir);
+  return check_finish("test_fit_problem");
+}
