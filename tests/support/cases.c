@@ -140,10 +140,7 @@ static void eval_at(cf_model_id model, const double *params, int k, double x, co
 void finite_difference(cf_model_id model, const double *params, int k, const double n[3],
                        const double l[3], const double v[3], double g_fd[3], double quotient[3],
                        int *one_sided) {
-  const cf_model_info *m = cf_model_info_get(model);
-  const cf_param_info *p = NULL;
-  for (int j = 0; j < m->param_count; ++j)
-    if (k >= m->offsets[j]) p = cf_param_info_get(m->params[j]);
+  const cf_param_info *p = cf_model_slot_param(model, k, NULL);
   double x = params[k];
   double h = 1e-6 * fmax(fabs(x), 1.0);
   int in_range = x >= p->lower && x <= p->upper;
