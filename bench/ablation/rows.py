@@ -32,6 +32,10 @@ def rows(work, demo, diligent):
         "dil_m4_all": [diligent, "--model", "M4", "--budget", "all"],
         "dil_30k_imp": [diligent, *centre, "--budget", "30000", "--sampling", "importance"],
         "dil_10k_uni": [diligent, *centre, "--budget", "10000", "--sampling", "uniform"],
+        "dil_30k_uni": [diligent, *centre, "--budget", "30000", "--sampling", "uniform"],
+        "dil_30k_str": [diligent, *centre, "--budget", "30000"],
+        "dil_100k_imp": [diligent, *centre, "--sampling", "importance"],
+        "s8_10k_uni": [s("8x320x240"), *centre, "--budget", "10000", "--sampling", "uniform"],
         "dil_auto": [diligent],
     }
 

@@ -114,7 +114,7 @@ typedef struct cf_lsq_summary {
   double trace[CF_LSQ_TRACE];
   int trace_count;
   int iterations;
-  int converged; /* Ceres' CONVERGENCE */
+  int converged;             /* Ceres' CONVERGENCE */
   cf_lsq_termination ending; /* cf_lsq_termination_name: fit.json's word */
   double seconds;
   double final_radius; /* the trust region at the end */

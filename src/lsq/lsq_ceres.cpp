@@ -120,6 +120,7 @@ class Solve {
         n_(problem->num_params),
         active_(n_, 0),
         freed_(n_, 0),
+        closings_(n_, 0),
         by_start_(n_, 0),
         x0_(n_),
         caches_(problem->num_blocks),
@@ -130,7 +131,7 @@ class Solve {
     pin_at_start();
     s_->stopped = 0;
     for (int round = 0; round < MAX_ROUNDS;) {
-      BoundWatcher watcher(p_, o_, active_);
+      BoundWatcher watcher(p_, o_, active_, closings_);
       chunk(round, &watcher);
       if (last_.termination_type == ceres::FAILURE) break;
       if (watcher.stopped()) {
@@ -209,6 +210,7 @@ class Solve {
   void pin_hits(const BoundWatcher &watcher) {
     for (int i = 0; i < n_; ++i) {
       if (watcher.hit()[i] == 0) continue;
+      closings_[i] += watcher.closed()[i];
       active_[i] = watcher.hit()[i];
       p_->x[i] = active_[i] < 0 ? p_->lower[i] : p_->upper[i];
     }
@@ -225,8 +227,8 @@ class Solve {
       any_at_bound |= side[i] != 0;
     }
     if (!any_at_bound) return false;         // nothing to decide, no pass for the gradient
-    std::vector<int> pinned, by_newton(n_);  // freed once, or pinned up front
-    for (int i = 0; i < n_; ++i) by_newton[i] = freed_[i] || by_start_[i];
+    std::vector<int> pinned, by_newton(n_);  // freed once, pinned for closing in or up front
+    for (int i = 0; i < n_; ++i) by_newton[i] = freed_[i] || closings_[i] > 0 || by_start_[i];
     if (!lsq::pinned_at_bounds(p_, o_->threads, &caches_, side, by_newton, &pinned)) return false;
     bool released = false;
     for (int i = 0; i < n_; ++i) {
@@ -264,6 +266,7 @@ class Solve {
   const int n_;
   std::vector<int> active_;    // −1/+1: pinned at the lower/upper bound
   std::vector<int> freed_;     // freed from a bound once in this solve
+  std::vector<int> closings_;  // times pinned for closing in
   std::vector<int> by_start_;  // pinned by the Newton step at the start
   std::vector<double> x0_;
   std::vector<BlockCache> caches_;
