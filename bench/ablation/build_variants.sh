@@ -13,7 +13,6 @@ tree="$out/tree"
 [ -d "$tree" ] || git -C "$root" worktree add --detach "$tree" "$commit"
 git -C "$tree" apply --check "$root/bench/ablation/lsq_ablate.patch" 2>/dev/null &&
   git -C "$tree" apply "$root/bench/ablation/lsq_ablate.patch"
-cmake -S "$tree" -B "$tree/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 build() {  # name bits
   local name=$1 bits=$2
   cmake -S "$tree" -B "$out/build-$name" -DCMAKE_BUILD_TYPE=Release \
