@@ -16,6 +16,7 @@
 #include "core/file.h"
 #include "core/rng.h"
 #include "synth_scene.h"
+#include "core/json_reader.h"
 
 #define SYNTH_PI 3.14159265358979323846
 
@@ -306,8 +307,7 @@ static json_t *rgb_json(double r, double g, double b) {
 static cf_status write_json(const char *dir, const char *name, json_t *doc, cf_error *err) {
   char path[4096];
   cf_status s = cf_path_join(dir, name, path, sizeof path, err);
-  if (s == CF_OK && json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0)
-    s = cf_error_set(err, CF_EIO, "%s: could not write", path);
+  if (s == CF_OK) s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);
   return s;
 }

@@ -3,10 +3,12 @@
 #include "core/file.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size,
                        cf_error *err) {
@@ -42,13 +44,45 @@ cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *s
   return CF_OK;
 }
 
-cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err) {
-  FILE *file = fopen(path, "wb");
-  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
-  size_t put = fwrite(data, 1, size, file);
-  int failed = fclose(file) != 0 || put != size;
-  if (failed) return cf_error_set(err, CF_EIO, "%s: could not write %zu bytes", path, size);
+/* All of data to the open descriptor fd, then to the disk (fsync, when
+ * flush); 0, or the errno of the first failure. */
+static int write_all(int fd, const char *data, size_t size, int flush) {
+  while (size > 0) {
+    ssize_t put = write(fd, data, size);
+    if (put < 0 && errno == EINTR) continue;
+    if (put < 0) return errno;
+    data += put;
+    size -= (size_t)put;
+  }
+  return flush && fsync(fd) != 0 ? errno : 0;
+}
+
+/* A path that exists and is not a regular file: written as it is. */
+static cf_status write_in_place(const char *path, const void *data, size_t size, cf_error *err) {
+  int fd = open(path, O_WRONLY | O_TRUNC);
+  if (fd < 0) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  int failed = write_all(fd, data, size, 0);
+  if (close(fd) != 0 && !failed) failed = errno;
+  if (failed) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(failed));
   return CF_OK;
+}
+
+cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err) {
+  struct stat st;
+  if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) return write_in_place(path, data, size, err);
+  char temporary[4200];
+  int n = snprintf(temporary, sizeof temporary, "%s.tmp-%ld", path, (long)getpid());
+  if (n < 0 || (size_t)n >= sizeof temporary)
+    return cf_error_set(err, CF_EINVAL, "%s: the path is too long", path);
+  int fd = open(temporary, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+  if (fd < 0) return cf_error_set(err, CF_EIO, "%s: %s", temporary, strerror(errno));
+  int failed = write_all(fd, data, size, 1);
+  if (close(fd) != 0 && !failed) failed = errno;
+  if (!failed && rename(temporary, path) != 0) failed = errno;
+  if (!failed) return CF_OK;
+  unlink(temporary);
+  return cf_error_set(err, CF_EIO, "%s: could not write %zu bytes: %s", path, size,
+                      strerror(failed));
 }
 
 cf_status cf_path_join(const char *dir, const char *name, char *out, size_t size, cf_error *err) {

@@ -14,7 +14,12 @@
  * before anything is allocated). Messages name the file. */
 cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size, cf_error *err);
 
-/* Write `size` bytes to `path` (created or replaced). */
+/* Write `size` bytes to `path` (created or replaced) so that a reader never
+ * sees it half-written: into a temporary file beside it, every write, the
+ * flush to the disk and the close checked, then renamed into place; on an
+ * error the temporary is removed and `path` left as it was. A path that
+ * exists and is not a regular file (/dev/stdout, a FIFO) is written
+ * directly. CF_EIO with the path and the system's reason. */
 cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err);
 
 /* `dir`/`name` into out (size bytes); `name` as it is when absolute or when

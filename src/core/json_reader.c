@@ -233,3 +233,11 @@ cf_status json_get_choice(const json_t *object, const json_at *at, const char *k
   }
   return json_fail(&here, err, CF_EPARSE, "'%s' is not one of %s", text, list);
 }
+
+cf_status json_write_file(const json_t *doc, const char *path, size_t flags, cf_error *err) {
+  char *text = doc ? json_dumps(doc, flags) : NULL;
+  if (!text) return cf_error_set(err, CF_ENOMEM, "%s: out of memory for the JSON text", path);
+  cf_status s = cf_write_file(path, text, strlen(text), err);
+  free(text);
+  return s;
+}

@@ -15,6 +15,11 @@
 
 #include "clayfit/status.h"
 
+/* The document written to `path` with Jansson's `flags` through
+ * cf_write_file: whole or not at all, errors with the system's reason. The
+ * one way clayfit writes a JSON file. */
+cf_status json_write_file(const json_t *doc, const char *path, size_t flags, cf_error *err);
+
 /* Where a value is: the file and its JSON path. Nodes chain on the stack. */
 typedef struct json_at {
   const char *file;

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "export_internal.h"
+#include "core/json_reader.h"
 
 enum { SPHERE_RINGS = 32, SPHERE_SEGMENTS = 64 };
 
@@ -254,7 +255,7 @@ cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *
   if (json_array_size(json_object_get(doc, "extensionsUsed")) == 0)
     json_object_del(doc, "extensionsUsed");
   /* the index accessor's min and max are not required; the vertex ones are */
-  int failed = json_dump_file(doc, path, JSON_INDENT(1) | JSON_REAL_PRECISION(9)) != 0;
+  cf_status written = json_write_file(doc, path, JSON_INDENT(1) | JSON_REAL_PRECISION(9), err);
   json_decref(doc);
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  return written;
 }

@@ -85,9 +85,9 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
       fit->created, "capture", "path", fit->capture_path, "name", fit->capture_name, "radiometry",
       fit->radiometry);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the preset", path);
-  int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0;
+  cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  return s;
 }
 
 /* ---- reading a preset back ---- */

@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "core/file.h"
+#include "core/json_reader.h"
 
 static json_t *numbers(const double *x, int n) {
   json_t *array = json_array();
@@ -330,7 +331,7 @@ cf_status cf_fit_write_json(const char *path, const cf_fit_report *rep, cf_error
       rep->load_seconds + rep->fit_seconds, "stages", stages_json(r));
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build fit.json");
   add_later_sections(doc, rep, &summary);
-  int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17)) != 0;
+  cf_status written = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  return written;
 }

@@ -4,6 +4,7 @@
 #include <time.h>
 
 #include "report_internal.h"
+#include "core/json_reader.h"
 
 static json_t *number_or_null(double x) {
   return isfinite(x) ? json_real(x) : json_null();
@@ -78,7 +79,7 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build report.json");
   char path[4096];
   snprintf(path, sizeof path, "%s/report.json", dir);
-  int failed = json_dump_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(10)) != 0;
+  cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(10), err);
   json_decref(doc);
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  return s;
 }
