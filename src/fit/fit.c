@@ -375,7 +375,8 @@ static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
     s = solve_with_covariance(run, round, &rank_deficient, err);
     int found = 0;
     if (s == CF_OK)
-      s = fit_find_unconstrained(p, run->jtj, run->covariance, rank_deficient, &run->plan, &found);
+      s = fit_find_unconstrained(p, run->jtj, run->covariance, rank_deficient, &run->plan, &found,
+                                 err);
     if (s == CF_OK && !found && !hidden.tested && !rank_deficient) {
       /* M4: is the base seen at all? (once) */
       s = fit_test_hidden_base(p, &run->plan, o, run->summary.final_cost, &hidden, err);

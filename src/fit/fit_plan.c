@@ -71,13 +71,23 @@ cf_status fit_solve(fit_problem *p, const cf_fit_options *o, int max_iterations,
   return fit_solve_normal(p, o, max_iterations, summary, NULL, err);
 }
 
+/* The problem as lsq.h sees it at the current values, in a new x (freed
+ * by the caller). */
+static cf_status lsq_problem_here(fit_problem *p, double **x, cf_lsq_problem *problem,
+                                  cf_error *err) {
+  *x = malloc((p->num_unknowns ? (size_t)p->num_unknowns : 1) * sizeof **x);
+  if (!*x) return cf_error_set(err, CF_ENOMEM, "out of memory for %d unknowns", p->num_unknowns);
+  fit_problem_get_x(p, *x);
+  fit_lsq_problem(p, *x, problem);
+  return CF_OK;
+}
+
 cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iterations,
                            cf_lsq_summary *summary, double *jtj, cf_error *err) {
-  double *x = malloc((p->num_unknowns ? (size_t)p->num_unknowns : 1) * sizeof *x);
-  if (!x) return cf_error_set(err, CF_ENOMEM, "out of memory for %d unknowns", p->num_unknowns);
-  fit_problem_get_x(p, x);
+  double *x;
   cf_lsq_problem problem;
-  fit_lsq_problem(p, x, &problem);
+  cf_status here = lsq_problem_here(p, &x, &problem, err);
+  if (here != CF_OK) return here;
   cf_lsq_options options;
   cf_lsq_default_options(&options);
   options.max_iterations = max_iterations;
@@ -109,11 +119,10 @@ cf_status fit_solve_normal(fit_problem *p, const cf_fit_options *o, int max_iter
 
 cf_status fit_normal_equations(fit_problem *p, int threads, double *jtj, double *jtu, double *cost,
                                cf_error *err) {
-  double total, *x = malloc((p->num_unknowns ? (size_t)p->num_unknowns : 1) * sizeof *x);
-  if (!x) return cf_error_set(err, CF_ENOMEM, "out of memory for %d unknowns", p->num_unknowns);
-  fit_problem_get_x(p, x);
+  double total, *x;
   cf_lsq_problem problem;
-  fit_lsq_problem(p, x, &problem);
+  cf_status here = lsq_problem_here(p, &x, &problem, err);
+  if (here != CF_OK) return here;
   int evaluated = cf_lsq_normal_equations(&problem, threads, jtj, jtu, &total);
   free(x);
   if (evaluated == CF_LSQ_FAILED)

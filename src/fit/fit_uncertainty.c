@@ -6,8 +6,8 @@
 #include <string.h>
 
 #include "fit_plan.h"
-#include "lsq/lsq.h"
 #include "lsq/linalg.h"
+#include "lsq/lsq.h"
 
 /* A model slot's standard deviation from its unknown's variance:
  * dρ = ρ d log ρ; dσ = dσ² / (2σ), and at σ = 0, where σ = √σ² is not
@@ -104,7 +104,7 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
  * the eigenvectors of the (width-scaled) normal matrix whose eigenvalues
  * are negligible, or whose standard deviation exceeds half their range. */
 cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
-                                 int rank_deficient, fit_plan *plan, int *found) {
+                                 int rank_deficient, fit_plan *plan, int *found, cf_error *err) {
   *found = 0;
   if (covariance && !rank_deficient) {
     for (int u = 0; u < p->num_unknowns; ++u) {
@@ -123,7 +123,7 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
   int m = scaled_model_block(p, jtj, slots, h);
   if (m == 0) return CF_OK;
   if (!cf_symmetric_eigen(m, h, values, vectors))
-    return cf_error_set(NULL, CF_ENUMERIC, "the normal matrix could not be decomposed");
+    return cf_error_set(err, CF_ENUMERIC, "the normal matrix of the model's slots is not finite");
   double largest = 0.0;
   for (int i = 0; i < m; ++i) largest = fmax(largest, values[i]);
   int weakest = 0;

@@ -33,6 +33,6 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
  * negligible eigenvalues, or whose standard deviation exceeds half their
  * range. *found says whether there were any. */
 cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
-                                 int rank_deficient, fit_plan *plan, int *found);
+                                 int rank_deficient, fit_plan *plan, int *found, cf_error *err);
 
 #endif /* CLAYFIT_FIT_UNCERTAINTY_H */

@@ -119,18 +119,20 @@ class ObservationAnalytic final : public ceres::CostFunction {
     double *jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
     for (int c = 0; c < 3; ++c) residuals[c] = -d.y[3 * i_ + c];
     if (jacobian != nullptr) std::fill(jacobian, jacobian + 3 * d.dim, 0.0);
-    std::vector<double> grad(3 * static_cast<size_t>(d.dim));
+    // (on the stack: Ceres calls this for every observation of every pass)
+    double grad[3 * CF_MAX_DIM];
     for (int j = 0; j < d.lights; ++j) {
       const double *l = &d.l[3 * (i_ * d.lights + j)], *e = &d.e[3 * (i_ * d.lights + j)];
       const double c_i = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
       if (!(c_i > 0.0) || (e[0] == 0.0 && e[1] == 0.0 && e[2] == 0.0)) continue;
       double f[3];
-      if (cf_eval(d.model, p, n, l, v, f, jacobian != nullptr ? grad.data() : nullptr) != CF_OK)
+      if (cf_eval(d.model, p, n, l, v, f, jacobian != nullptr ? grad : nullptr) != CF_OK)
         return false;
       for (int c = 0; c < 3; ++c) {
         residuals[c] += f[c] * (e[c] * c_i);
         if (jacobian == nullptr) continue;
-        for (int k = 0; k < d.dim; ++k) jacobian[c * d.dim + k] += grad[c * d.dim + k] * (e[c] * c_i);
+        for (int k = 0; k < d.dim; ++k)
+          jacobian[c * d.dim + k] += grad[c * d.dim + k] * (e[c] * c_i);
       }
     }
     return true;
@@ -369,8 +371,9 @@ int Usage(FILE *f) {
                "clayfit's fit against Ceres AutoDiff, Ceres NumericDiff (CENTRAL), Ceres with\n"
                "the C evaluator's analytic derivatives (one residual block per observation)\n"
                "and SciPy's least_squares on the same observations (issue 6). LIST: a\n"
-               "comma-separated subset of autodiff,numeric,analytic,scipy (default all). --check: exit 1 unless every\n"
-               "peer that ran reached clayfit's cost within %g relative (or better).\n"
+               "comma-separated subset of autodiff,numeric,analytic,scipy (default all).\n"
+               "--check: exit 1 unless every peer that ran reached clayfit's cost within %g\n"
+               "relative (or better).\n"
                "Exit 1 whenever a peer's model disagrees with the C evaluator beyond %g.\n"
                "The start: the model's defaults, sigma 0.3, the albedo from a closed form;\n"
                "or (--start-from-truth) the truth clayfit synth wrote, each slot moved by D\n"
