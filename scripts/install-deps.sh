@@ -12,7 +12,7 @@ packages=(
   colmap                             # camera poses (integration tests)
   python3 python3-jsonschema         # test harness: JSON Schema validation
   python3-numpy python3-scipy        # the SciPy peer (scripts/peer_scipy.py, bench_peers.sh)
-  clang libclang-rt-14-dev           # libFuzzer for the binary readers' fuzz target
+  clang libclang-rt-14-dev           # libFuzzer for the fuzz targets (scripts/fuzz.sh)
   chromium                           # the report's page tested in a real browser
   libxml2-utils                      # xmllint: the MaterialX and Mitsuba presets' tests
 )

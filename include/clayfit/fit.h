@@ -281,6 +281,12 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
                       cf_fit_choice *choice, cf_fit_result *result, cf_error *err);
 void cf_fit_choice_free(cf_fit_choice *choice);
 
+/* Options that no capture could make right, before any work: a held
+ * value outside its parameter's range (the message names the parameter,
+ * the value and the range), a start out of range, a footprint tolerance
+ * outside (0, 1). CF_ERANGE or CF_EINVAL. */
+cf_status cf_fit_check_options(const cf_fit_options *options, cf_error *err);
+
 /* Fit one model to a loaded capture. The result owns its per-image arrays
  * (cf_fit_result_free). */
 cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *options,

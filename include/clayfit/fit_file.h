@@ -21,6 +21,8 @@
 extern "C" {
 #endif
 
+struct json_t; /* Jansson's */
+
 /* ---- writing (clayfit_fit) ---- */
 
 typedef struct cf_fit_report {
@@ -67,11 +69,23 @@ typedef struct cf_fit_file {
   double loss_scale; /* loss.scale_sigma */
   int footprint;     /* cf_fit_options.footprint: 0 auto, 1 centre, S fixed */
   double footprint_tolerance;
+  size_t capture_images, capture_observations; /* capture.images, capture.observations */
+  struct json_t *document; /* fit.json as read and checked (owned; freed by cf_fit_file_free):
+                              what the report shows beyond the fields above (the choice's
+                              candidates, the starts, the solver's trace, the timings, the
+                              images' names), so that fit.json is parsed once, under the cap */
 } cf_fit_file;
 
-/* Read fit.json back (untrusted: every field type- and range-checked, errors
- * name the file and the JSON path). A capture that is not found is not an
- * error here (export does not need it): see cf_fit_file_check_capture. */
+/* The most bytes cf_fit_file_read accepts, checked before anything is
+ * allocated. A fit of 1,040 images writes 181 KB (123 bytes an image);
+ * parsing costs up to 45 times the size (8 MiB of "[]," took 363 MB with
+ * Jansson 2.14, where the earlier 256 MiB cap allowed 11 GB). */
+#define CF_FIT_FILE_MAX_SIZE ((size_t)8 << 20)
+
+/* Read fit.json back (untrusted: at most CF_FIT_FILE_MAX_SIZE bytes, every
+ * field type- and range-checked, errors name the file and the JSON path). A
+ * capture that is not found is not an error here (export does not need it):
+ * see cf_fit_file_check_capture. */
 cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err);
 void cf_fit_file_free(cf_fit_file *file);
 

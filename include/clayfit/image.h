@@ -45,10 +45,29 @@ typedef struct cf_image_info {
  * as stored (never premultiplied into the colour channels), and an EXIF
  * Orientation tag is not applied (pixels come out as stored, as COLMAP
  * reads them). Errors name the file: missing, unreadable, unsupported,
- * zero size, more than 4 channels, or more than 2^31 values; *image is
- * then empty (pixels NULL). info may be NULL. Non-finite values are kept
+ * zero size, more than 4 channels, more than 2^31 values, a truncated
+ * PNG; CF_ENOMEM when memory runs out decoding it; *image is then empty
+ * (pixels NULL). info may be NULL. Non-finite values are kept
  * (see cf_image_check_finite). */
 cf_status cf_image_read(const char *path, cf_image *image, cf_image_info *info, cf_error *err);
+
+/* cf_image_read, but a file whose header declares another size than
+ * width x height (both > 0; 0 and 0 for any) is refused (CF_EINVAL naming
+ * both sizes) before any pixel is decoded: a small compressed file may
+ * declare an image of gigabytes. */
+cf_status cf_image_read_sized(const char *path, int width, int height, cf_image *image,
+                              cf_image_info *info, cf_error *err);
+
+/* What an image file's header declares, read without decoding a pixel. */
+typedef struct cf_image_header {
+  int width, height, channels;
+  cf_image_info info;
+} cf_image_header;
+
+/* The header of `path`, checked as cf_image_read checks it (every error
+ * but those of the pixels themselves). A PNG is also walked chunk by chunk
+ * (lengths only): one that ends before its IEND chunk is CF_EIO. */
+cf_status cf_image_read_header(const char *path, cf_image_header *header, cf_error *err);
 
 /* CF_EINVAL naming `path`, the first non-finite value's pixel (x, y) and
  * channel, and how many there are, if the image holds NaN or Inf. */

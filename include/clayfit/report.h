@@ -39,17 +39,46 @@ extern "C" {
 #define CF_REPORT_SIGMA_RANGE 5.0
 
 typedef struct cf_report_options {
-  const char *fit_path; /* fit.json, named in the report and read for the
-                           model choice, the solver and the timings */
+  const char *fit_path; /* fit.json, named in the report */
   const char *version;  /* clayfit's */
   cf_progress_fn progress;
   void *progress_user;
+  const char *capture_path;  /* the capture re-rendered, as opened (NULL: the fit's) */
+  const char *capture_check; /* how it was found to be the fit's capture, for
+                                report.json (cf_report_compare_captures); NULL: "" */
 } cf_report_options;
 
-/* Write the report of `fit` (read from options->fit_path) on its capture
- * into dir (created). Errors name the file. */
+/* Write the report of `fit` on `capture` into the folder dir, whole or not
+ * at all: it is built in DIR.tmp-PID beside dir, then exchanged with dir
+ * in one rename (where the file system cannot exchange, the earlier report
+ * is moved aside to DIR.old-PID first), and the earlier report removed. A
+ * run killed at any point leaves dir with the earlier report or the new
+ * one, complete, and at most such a leftover, which the next report into
+ * dir removes (only folders of exactly those names whose process is gone).
+ * dir is refused as cf_report_check_dir says. Every write is checked;
+ * errors name the file and the reason, and leave dir as it was. */
 cf_status cf_report_write(const cf_capture *capture, const cf_fit_file *fit, const char *dir,
                           const cf_report_options *options, cf_error *err);
+
+/* CF_OK if dir may receive a report: it does not exist (it is created, with
+ * its parents), or it is an empty folder, or an earlier report (report.json
+ * of clayfit's, and beside it nothing but index.html, images/ *.png and
+ * plots/ *.svg). Else CF_EINVAL with what is wrong and what to do: a file,
+ * a symbolic link, or a folder holding anything else is never replaced. */
+cf_status cf_report_check_dir(const char *dir, cf_error *err);
+
+/* CF_OK if `capture` (opened from capture_path) is the same capture as
+ * `fit_capture`, the capture the fit was made on (opened from fit_path's
+ * capture.path): the same images (count, names, exposures, light counts),
+ * the same observations (pixels), the same lights (each observation's light
+ * directions and irradiances: the lights' directions, intensities and
+ * positions), the same colours (each observation's RGB and clip flags: what
+ * the colour block makes of the photos) and the same noise model and
+ * radiometry. Else CF_EINVAL naming the first difference. Values agree
+ * within a relative 1e-6. */
+cf_status cf_report_compare_captures(const cf_capture *capture, const char *capture_path,
+                                     const cf_capture *fit_capture, const char *fit_capture_path,
+                                     cf_error *err);
 
 #ifdef __cplusplus
 }

@@ -87,6 +87,7 @@ static cf_status load(cf_capture *capture, const char *path, const cf_capture_op
   if ((s = capture_read_images(capture, options, err)) != CF_OK) return s;
   if (capture->spec.exposure == CF_EXPOSURE_EXIF) normalise_exif_exposures(capture);
   if ((s = check_sphere_seen(capture, err)) != CF_OK) return s;
+  if ((s = capture_screen_observations(capture, err)) != CF_OK) return s;
   /* the observations' irradiance in absolute units from the reference */
   return capture->spec.has_reference ? capture_apply_reference(capture, err) : CF_OK;
 }
@@ -167,4 +168,11 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
   memcpy(summary->reference_channel_scales, capture->reference_channel_scales,
          sizeof capture->reference_channel_scales);
   summary->reference_pixels = capture->reference_pixels;
+  summary->has_circle = capture->circle_source != NULL;
+  summary->circle_center_px[0] = capture->circle.cx;
+  summary->circle_center_px[1] = capture->circle.cy;
+  summary->circle_axes_px[0] = capture->circle.a;
+  summary->circle_axes_px[1] = capture->circle.b;
+  summary->circle_angle = capture->circle.angle;
+  summary->circle_source = capture->circle_source;
 }

@@ -6,9 +6,12 @@
  * their order is the images'). The first error in image order is the one
  * reported, as if the images were read one by one. One mask file for
  * every image (DiLiGenT's) is decoded once. */
+#define _POSIX_C_SOURCE 200809L /* stat, dev_t, ino_t */
 #include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "capture_internal.h"
 
@@ -20,6 +23,7 @@ typedef struct decoded {
   cf_status status;
   cf_error err;
   int ready;
+  int mask_empty; /* its own mask has no usable pixel */
 } decoded;
 
 typedef struct read_ahead {
@@ -45,6 +49,14 @@ static cf_status check_mask(const cf_capture *capture, size_t k, const cf_image 
                       capture->spec.image_paths[k], image->width, image->height);
 }
 
+/* 1 if no pixel of the mask is usable (capture_mask_usable). */
+static int mask_is_empty(const cf_image *mask) {
+  const size_t pixels = (size_t)mask->width * (size_t)mask->height;
+  for (size_t i = 0; i < pixels; ++i)
+    if (capture_mask_usable(mask->pixels[i * (size_t)mask->channels])) return 0;
+  return 1;
+}
+
 /* Image k's own mask, or the one every image shares. */
 static const cf_image *mask_of(const read_ahead *r, const decoded *d) {
   if (!r->capture->spec.mask_paths) return NULL;
@@ -56,12 +68,17 @@ static const cf_image *mask_of(const read_ahead *r, const decoded *d) {
 static void decode(const read_ahead *r, size_t k, decoded *d) {
   const cf_capture *capture = r->capture;
   const cf_capture_spec *spec = &capture->spec;
-  d->status = cf_image_read(spec->image_paths[k], &d->image, &d->info, &d->err);
+  /* the size its header declared when the headers were read (it must
+   * not have changed since) */
+  const int width = capture->images[k].width, height = capture->images[k].height;
+  d->status =
+      cf_image_read_sized(spec->image_paths[k], width, height, &d->image, &d->info, &d->err);
   if (d->status == CF_OK && d->info.is_float) /* integer samples are finite */
     d->status = cf_image_check_finite(&d->image, spec->image_paths[k], &d->err);
   if (d->status != CF_OK || !spec->mask_paths) return;
   if (!r->one_mask) {
-    d->status = cf_image_read(spec->mask_paths[k], &d->mask, NULL, &d->err);
+    d->status = cf_image_read_sized(spec->mask_paths[k], width, height, &d->mask, NULL, &d->err);
+    if (d->status == CF_OK) d->mask_empty = mask_is_empty(&d->mask);
   } else if (r->shared_status != CF_OK) {
     d->status = r->shared_status;
     d->err = r->shared_err;
@@ -102,6 +119,11 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *
     s = cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
                      spec->normal_map, capture->normal_map.width, capture->normal_map.height,
                      spec->image_paths[k], d->image.width, d->image.height);
+  if (s == CF_OK && d->mask_empty)
+    capture_warn(capture,
+                 "%s: no pixel of this mask is usable (all are 0.5 or less), so %s adds "
+                 "no observation",
+                 spec->mask_paths[k], spec->image_paths[k]);
   double exposure = 1.0;
   if (s == CF_OK) s = capture_raw_exposure(capture, k, &d->info, &exposure, err);
   if (s == CF_OK) {
@@ -110,6 +132,167 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *
     cf_decode decoding = capture_image_decode(capture, &d->info, exposure);
     s = capture_add_observations(capture, k, &d->image, mask, &decoding, err);
   }
+  return s;
+}
+
+/* ---- every header before any pixel ---- */
+
+typedef struct file_id {
+  dev_t dev;
+  ino_t ino;
+  size_t image;
+} file_id;
+
+static int compare_ids(const void *a, const void *b) {
+  const file_id *x = a, *y = b;
+  if (x->dev != y->dev) return x->dev < y->dev ? -1 : 1;
+  if (x->ino != y->ino) return x->ino < y->ino ? -1 : 1;
+  return x->image < y->image ? -1 : x->image > y->image;
+}
+
+/* One file listed twice (by name, or through another path to it) would
+ * count twice: double weight in the fit, and observations taken as
+ * independent that are not, so an uncertainty too small. A measurement
+ * should not be quietly biased, so it is an error, not a warning. Files
+ * that cannot be examined are left to the reading that follows. */
+static cf_status check_duplicates(const cf_capture *capture, cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  size_t n = spec->num_images, found = 0;
+  file_id *ids = malloc((n ? n : 1) * sizeof *ids);
+  if (!ids) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
+  for (size_t k = 0; k < n; ++k) {
+    struct stat st;
+    if (stat(spec->image_paths[k], &st) != 0) continue;
+    ids[found].dev = st.st_dev, ids[found].ino = st.st_ino, ids[found].image = k;
+    ++found;
+  }
+  qsort(ids, found, sizeof *ids, compare_ids);
+  cf_status s = CF_OK;
+  for (size_t i = 1; i < found && s == CF_OK; ++i)
+    if (ids[i].dev == ids[i - 1].dev && ids[i].ino == ids[i - 1].ino)
+      s = cf_error_set(err, CF_EINVAL,
+                       "%s: images %zu (%s) and %zu (%s) are the same file; an image listed "
+                       "twice would count twice in the fit (double weight, an uncertainty too "
+                       "small)",
+                       spec->path, ids[i - 1].image + 1, spec->image_names[ids[i - 1].image],
+                       ids[i].image + 1, spec->image_names[ids[i].image]);
+  free(ids);
+  return s;
+}
+
+/* The kinds of samples among the images, for the warning about a mix. */
+enum { SAMPLE_8, SAMPLE_16, SAMPLE_OTHER_INTEGER, SAMPLE_FLOAT, SAMPLE_KINDS };
+static const char *const sample_kind_names[SAMPLE_KINDS] = {"8-bit", "16-bit", "other integer",
+                                                            "float"};
+
+static int sample_kind(const cf_image_info *info) {
+  if (info->is_float) return SAMPLE_FLOAT;
+  return info->bits_per_sample == 8    ? SAMPLE_8
+         : info->bits_per_sample == 16 ? SAMPLE_16
+                                       : SAMPLE_OTHER_INTEGER;
+}
+
+/* A warning when the images do not all store the same kind of sample: an
+ * 8-bit image among 16-bit ones is 256 times more coarsely quantised and
+ * has likely been through another pipeline (a tone curve). */
+static void warn_mixed_samples(cf_capture *capture, const size_t counts[SAMPLE_KINDS],
+                               const size_t first[SAMPLE_KINDS]) {
+  int kinds = 0;
+  for (int i = 0; i < SAMPLE_KINDS; ++i) kinds += counts[i] > 0;
+  if (kinds < 2) return;
+  char list[CF_ERROR_MESSAGE_SIZE] = "";
+  size_t used = 0;
+  for (int i = 0; i < SAMPLE_KINDS && used < sizeof list; ++i)
+    if (counts[i])
+      used += (size_t)snprintf(list + used, sizeof list - used, "%s%zu %s (%s%s)", used ? ", " : "",
+                               counts[i], sample_kind_names[i], counts[i] > 1 ? "the first " : "",
+                               capture->spec.image_names[first[i]]);
+  capture_warn(capture,
+               "the images mix sample types: %s; their quantisation and likely their processing "
+               "differ",
+               list);
+}
+
+/* The bytes image data of this header decode to (32-bit floats). */
+static unsigned long long decoded_bytes(const cf_image_header *h) {
+  return (unsigned long long)h->width * (unsigned long long)h->height *
+         (unsigned long long)h->channels * sizeof(float);
+}
+
+/* An error about a size read from a header says that nothing was decoded. */
+static cf_status from_header(cf_status s, cf_error *err) {
+  if (s != CF_OK && err) {
+    size_t n = strlen(err->message);
+    snprintf(err->message + n, sizeof err->message - n, " (from its header, before decoding)");
+  }
+  return s;
+}
+
+/* Image k's header against its camera (capture_check_size, which records
+ * its size), the normal map and its mask's header (or the shared mask's). */
+static cf_status check_header(cf_capture *capture, size_t k, const cf_image_header *mask_shared,
+                              cf_image_header *h, unsigned long long *bytes, cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  cf_status s = cf_image_read_header(spec->image_paths[k], h, err);
+  if (s != CF_OK) return s;
+  *bytes += decoded_bytes(h);
+  cf_image as_declared = {h->width, h->height, h->channels, NULL};
+  if ((s = from_header(capture_check_size(capture, k, &as_declared, err), err)) != CF_OK) return s;
+  const cf_image *map = &capture->normal_map;
+  if (map->pixels && (map->width != h->width || map->height != h->height))
+    return from_header(
+        cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
+                     spec->normal_map, map->width, map->height, spec->image_paths[k], h->width,
+                     h->height),
+        err);
+  if (!spec->mask_paths) return CF_OK;
+  cf_image_header own;
+  const cf_image_header *mask = mask_shared;
+  if (!mask) {
+    if ((s = cf_image_read_header(spec->mask_paths[k], &own, err)) != CF_OK) return s;
+    *bytes += decoded_bytes(&own);
+    mask = &own;
+  }
+  if (mask->width == h->width && mask->height == h->height) return CF_OK;
+  return from_header(
+      cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d",
+                   spec->mask_paths[k], mask->width, mask->height, spec->image_paths[k], h->width,
+                   h->height),
+      err);
+}
+
+/* Every image's and mask's header, in image order, before any pixel is
+ * decoded: a small compressed file may declare gigabytes (a 1.9 MB PNG
+ * declaring 26000 x 26000 took 29 s and 10 GB to decode before its size
+ * was refused). Also the total against the cap, duplicates, and a mix of
+ * sample types (a warning). */
+static cf_status read_headers(cf_capture *capture, const cf_capture_options *options, int one_mask,
+                              cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  cf_status s = check_duplicates(capture, err);
+  unsigned long long cap =
+      options && options->max_image_bytes ? options->max_image_bytes : CF_CAPTURE_MAX_IMAGE_BYTES;
+  unsigned long long bytes = 0;
+  cf_image_header shared;
+  if (s == CF_OK && one_mask) {
+    s = cf_image_read_header(spec->mask_paths[0], &shared, err);
+    bytes += decoded_bytes(&shared);
+  }
+  size_t counts[SAMPLE_KINDS] = {0}, first[SAMPLE_KINDS] = {0};
+  for (size_t k = 0; s == CF_OK && k < spec->num_images; ++k) {
+    cf_image_header h;
+    s = check_header(capture, k, one_mask ? &shared : NULL, &h, &bytes, err);
+    if (s == CF_OK && bytes > cap)
+      s = cf_error_set(err, CF_ERANGE,
+                       "%s: the images up to %s (%zu of %zu; %d x %d x %d the last) and "
+                       "their masks decode to %.3g GB of 32-bit floats, more than the cap of "
+                       "%.3g GB on a capture's image data (checked from the headers; raise it "
+                       "with clayfit's --max-image-memory GB)",
+                       spec->path, spec->image_names[k], k + 1, spec->num_images, h.width, h.height,
+                       h.channels, (double)bytes / 1e9, (double)cap / 1e9);
+    if (s == CF_OK && counts[sample_kind(&h.info)]++ == 0) first[sample_kind(&h.info)] = k;
+  }
+  if (s == CF_OK) warn_mixed_samples(capture, counts, first);
   return s;
 }
 
@@ -131,13 +314,23 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
   const char *const *masks = (const char *const *)capture->spec.mask_paths;
   r.one_mask = masks && n > 1;
   for (size_t k = 1; r.one_mask && k < n; ++k) r.one_mask = strcmp(masks[k], masks[0]) == 0;
-  if (r.one_mask) r.shared_status = cf_image_read(masks[0], &r.shared_mask, NULL, &r.shared_err);
+  cf_status s = read_headers(capture, options, r.one_mask, err);
+  if (s == CF_OK && r.one_mask) {
+    r.shared_status =
+        cf_image_read_sized(masks[0], capture->images[0].width, capture->images[0].height,
+                            &r.shared_mask, NULL, &r.shared_err);
+    if (r.shared_status == CF_OK && mask_is_empty(&r.shared_mask))
+      capture_warn(capture,
+                   "%s: no pixel of this mask is usable (all are 0.5 or less), so no "
+                   "image adds an observation",
+                   masks[0]);
+  }
   pthread_t threads[READERS];
   int started = 0;
-  for (; started < READERS && (size_t)started < n; ++started)
+  for (; s == CF_OK && started < READERS && (size_t)started < n; ++started)
     if (pthread_create(&threads[started], NULL, reader, &r) != 0) break;
-  cf_status s = CF_OK;
-  if (started == 0 && n > 0) s = cf_error_set(err, CF_EIO, "cannot start a thread to read images");
+  if (s == CF_OK && started == 0 && n > 0)
+    s = cf_error_set(err, CF_ENOMEM, "cannot start a thread to read images (out of resources)");
   for (size_t k = 0; s == CF_OK && k < n; ++k) {
     if (options && options->progress)
       options->progress(options->progress_user, "reading images", k, n);

@@ -38,6 +38,7 @@ struct cf_capture {
   double rms_px;            /* of the triangulation, over the kept points */
   double silhouette_kept;   /* fraction of outline points kept */
   cf_ellipse circle;        /* orthographic + silhouettes */
+  const char *circle_source; /* the mask or image it was fitted to (a spec path) */
   cf_image normal_map;      /* orthographic + normal map, normalised */
   uint8_t *map_class;       /* its pixels: a surface_hit each */
   int map_box[4];           /* the box of its pixels not SURFACE_MISS:
@@ -55,6 +56,11 @@ struct cf_capture {
   double reference_scale, reference_spread, reference_channel_scales[3];
   size_t reference_pixels;
 };
+
+/* Is a mask's value (its first channel) one of a usable pixel? */
+static inline int capture_mask_usable(float value) {
+  return value > 0.5f;
+}
 
 /* Add a warning (printf-style). Out of memory loses the warning only. */
 void capture_warn(cf_capture *capture, const char *format, ...)
@@ -113,6 +119,11 @@ void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int 
 /* observations.c: decode image k and append its observations. */
 cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
                                    const cf_image *mask, const cf_decode *decode, cf_error *err);
+
+/* observations.c: leave out the values that cannot be radiance (counted
+ * per image, a warning beyond a trace), then refuse a capture with no lit,
+ * positive observation or mostly such values (CF_EINVAL, saying why). */
+cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
 
 /* Read every image (and its mask) and add its observations, in image
  * order, decoding ahead on other threads (capture_images.c). */

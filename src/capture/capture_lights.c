@@ -3,6 +3,7 @@
  * (DiLiGenT), and environment maps reduced to directional lights. */
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,12 +13,46 @@
 
 enum { MAX_ROWS_FILE = 64 << 20 };
 
+/* Where the images' count comes from, for messages: "the 96 images of
+ * filenames.txt" or "the 96 images of images.files". */
+static void images_source(const cf_capture_spec *spec, char *out, size_t size) {
+  snprintf(out, size, "the %zu images of %s", spec->num_images,
+           spec->image_list ? spec->image_list : "images.files");
+}
+
+/* One number of a row at p: CF_OK, or CF_EPARSE naming the token. A
+ * subnormal (1e-320) is finite and kept; strtod's ERANGE counts only when
+ * the value overflowed. */
+static cf_status read_number(const char *path, size_t line, int k, char **p, double *x,
+                             cf_error *err) {
+  errno = 0;
+  char *stop;
+  *x = strtod(*p, &stop);
+  int length = 0;
+  while ((*p)[length] && (*p)[length] != ' ' && (*p)[length] != '\t' && (*p)[length] != '\r' &&
+         length < 40)
+    ++length;
+  if (stop == *p)
+    return cf_error_set(err, CF_EPARSE, "%s:%zu: value %d of the row, '%.*s', is not a number",
+                        path, line, k + 1, length, *p);
+  if (!isfinite(*x))
+    return cf_error_set(err, CF_EPARSE,
+                        "%s:%zu: value %d of the row, '%.*s', is not a finite number (beyond "
+                        "+-1.8e308, or inf or nan)",
+                        path, line, k + 1, length, *p);
+  *p = stop;
+  return CF_OK;
+}
+
 /* Rows of 3 finite numbers, one per image ('#' comments and blank lines
  * skipped). Errors name the file and the line. */
-static cf_status read_rows(const char *path, size_t rows, double *out, cf_error *err) {
-  char *text;
+static cf_status read_rows(const char *path, const cf_capture_spec *spec, double *out,
+                           cf_error *err) {
+  const size_t rows = spec->num_images;
+  char *text, source[CF_ERROR_MESSAGE_SIZE / 2];
   size_t size, line = 0, row = 0;
-  cf_status s = cf_read_file(path, MAX_ROWS_FILE, &text, &size, err);
+  images_source(spec, source, sizeof source);
+  cf_status s = cf_read_text_file(path, MAX_ROWS_FILE, &text, &size, err);
   if (s != CF_OK) return s;
   for (char *cursor = text; s == CF_OK && *cursor;) {
     char *end = strchr(cursor, '\n');
@@ -27,19 +62,11 @@ static cf_status read_rows(const char *path, size_t rows, double *out, cf_error 
     while (*p == ' ' || *p == '\t' || *p == '\r') ++p;
     if (*p && *p != '#') {
       if (row == rows) {
-        s = cf_error_set(err, CF_EPARSE, "%s:%zu: more rows than the %zu images", path, line, rows);
+        s = cf_error_set(err, CF_EPARSE, "%s:%zu: more rows than %s", path, line, source);
         break;
       }
-      for (int k = 0; k < 3 && s == CF_OK; ++k) {
-        errno = 0;
-        char *stop;
-        double x = strtod(p, &stop);
-        if (stop == p || !isfinite(x) || errno == ERANGE)
-          s = cf_error_set(err, CF_EPARSE, "%s:%zu: value %d of the row is not a finite number",
-                           path, line, k + 1);
-        out[3 * row + k] = x;
-        p = stop;
-      }
+      for (int k = 0; k < 3 && s == CF_OK; ++k)
+        s = read_number(path, line, k, &p, &out[3 * row + k], err);
       while (s == CF_OK && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
       if (s == CF_OK && *p)
         s = cf_error_set(err, CF_EPARSE, "%s:%zu: expected 3 numbers, found more", path, line);
@@ -50,7 +77,8 @@ static cf_status read_rows(const char *path, size_t rows, double *out, cf_error 
   }
   free(text);
   if (s == CF_OK && row != rows)
-    s = cf_error_set(err, CF_EPARSE, "%s: %zu rows for %zu images", path, row, rows);
+    s = cf_error_set(err, CF_EPARSE, "%s: %zu rows (lines not blank and not '#' comments) for %s",
+                     path, row, source);
   return s;
 }
 
@@ -60,10 +88,15 @@ static cf_status per_image_lights(cf_capture *capture, const cf_light_spec *spec
   double *directions = malloc(3 * n * sizeof(double));
   double *intensities = malloc(3 * n * sizeof(double));
   cf_status s = directions && intensities ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) s = read_rows(spec_light->directions, n, directions, err);
-  if (s == CF_OK) s = read_rows(spec_light->intensities, n, intensities, err);
+  if (s == CF_OK) s = read_rows(spec_light->directions, &capture->spec, directions, err);
+  if (s == CF_OK) s = read_rows(spec_light->intensities, &capture->spec, intensities, err);
   for (size_t k = 0; s == CF_OK && k < n; ++k) {
     double *d = directions + 3 * k, *e = intensities + 3 * k;
+    /* scaled by its largest component first: the squares of 1e200 overflow
+     * (an infinite length made the direction 0, 0, 0), those of 1e-200
+     * underflow (refused as zero length) */
+    double big = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+    for (int c = 0; c < 3 && big > 0.0; ++c) d[c] /= big;
     double length = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     if (!(length > 0.0))
       s = cf_error_set(err, CF_EPARSE, "%s: row %zu: the direction has zero length",

@@ -76,12 +76,13 @@ static cf_status read_camera(const json_t *root, const json_at *at, cf_capture_s
 
 /* ---- images ---- */
 
-/* Names from a list file: one per line, blank lines skipped. */
+/* Names from a list file: one per line, blank lines and '#' comments
+ * skipped (as in the light files), spaces at either end removed. */
 static cf_status read_list(const char *path, const json_at *at, cf_capture_spec *spec,
                            cf_error *err) {
   char *text;
   size_t size;
-  cf_status s = cf_read_file(path, MAX_LIST_FILE, &text, &size, err);
+  cf_status s = cf_read_text_file(path, MAX_LIST_FILE, &text, &size, err);
   if (s != CF_OK) return json_fail(at, err, s, "%s", err->message);
   size_t capacity = 0, line = 0;
   for (char *cursor = text; *cursor;) {
@@ -92,7 +93,7 @@ static cf_status read_list(const char *path, const json_at *at, cf_capture_spec 
     while (n && (cursor[n - 1] == '\r' || cursor[n - 1] == ' ' || cursor[n - 1] == '\t'))
       cursor[--n] = '\0';
     while (*cursor == ' ' || *cursor == '\t') ++cursor;
-    if (*cursor) {
+    if (*cursor && *cursor != '#') {
       if (spec->num_images == MAX_IMAGES) {
         free(text);
         return cf_error_set(err, CF_ERANGE, "%s: more than %d images", path, MAX_IMAGES);
@@ -166,7 +167,7 @@ static cf_status read_images(const json_t *root, const json_at *at, cf_capture_s
     char *list_path = NULL;
     s = resolve(spec->dir, list, &list_at, &list_path, err);
     if (s == CF_OK) s = read_list(list_path, &list_at, spec, err);
-    free(list_path);
+    spec->image_list = list_path;
   }
   if (s == CF_OK && !(spec->image_paths = calloc(spec->num_images, sizeof(char *))))
     s = out_of_memory(err);
@@ -630,6 +631,7 @@ void cf_capture_spec_free(cf_capture_spec *spec) {
   free(spec->name);
   free(spec->colmap_model);
   free_strings(spec->image_names, spec->num_images);
+  free(spec->image_list);
   free_strings(spec->image_paths, spec->num_images);
   free_strings(spec->mask_paths, spec->num_images);
   free(spec->exposures);

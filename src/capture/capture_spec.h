@@ -66,6 +66,7 @@ typedef struct cf_capture_spec {
 
   size_t num_images;
   char **image_names; /* as given (the COLMAP model's names) */
+  char *image_list;   /* the resolved list file they came from, or NULL */
   char **image_paths; /* resolved */
   double *exposures;  /* given exposures, or NULL */
   char **mask_paths;  /* resolved per-image masks, or NULL */

@@ -157,6 +157,7 @@ static cf_status orthographic_circle(cf_capture *capture, cf_error *err) {
                         "needs camera.view [0, 0, 1] (normals are in the camera's frame)",
                         spec->path);
   const char *source = spec->mask_paths ? spec->mask_paths[0] : spec->image_paths[0];
+  capture->circle_source = source;
   cf_image image = {0};
   cf_status s = cf_image_read(source, &image, NULL, err);
   if (s != CF_OK) return s;

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "capture_internal.h"
+#include "core/file.h"
 
 /* The focal length in pixels near the image centre, measured from the
  * projection itself so that it holds for every camera model: the pixel
@@ -32,10 +33,12 @@ static cf_status load_colmap_views(cf_capture *capture, cf_error *err) {
         cf_colmap_find_image_by_name(&capture->colmap, spec->image_names[k]);
     if (!image) {
       const char *first = capture->colmap.num_images ? capture->colmap.images[0].name : "(none)";
+      char hidden[160];
+      cf_path_hidden_characters(spec->image_names[k], hidden, sizeof hidden);
       return cf_error_set(err, CF_ENOTFOUND,
-                          "%s: image '%s' is not in the COLMAP model %s (%zu images there, "
+                          "%s: image '%s'%s is not in the COLMAP model %s (%zu images there, "
                           "the first named '%s'); give the names as the model does",
-                          spec->path, spec->image_names[k], spec->colmap_model,
+                          spec->path, spec->image_names[k], hidden, spec->colmap_model,
                           capture->colmap.num_images, first);
     }
     capture_view *view = &capture->views[k];

@@ -17,6 +17,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -26,10 +27,15 @@
 #include <exception>
 #include <limits>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
 #include "clayfit/image.h"
+#include "image_exr_check.h"
+extern "C" {
+#include "core/file.h"
+}
 
 namespace {
 
@@ -123,17 +129,71 @@ bool read_pixels(OIIO::ImageInput &input, const OIIO::ImageSpec &spec, float *pi
   return input.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels);
 }
 
-cf_status read_image(const char *path, cf_image *image, cf_image_info *info, cf_error *err) {
+/* A PNG's chunks walked from their lengths without decoding: CF_EPARSE
+ * when the file ends inside a chunk or before IEND. libpng's error on a
+ * truncated file unwinds (longjmp) through OpenImageIO's read callback and
+ * leaks its message string; this refuses such a file before it is opened. */
+cf_status check_png_chunks(const char *path, FILE *file, long long file_size, cf_error *err) {
+  long long at = 8; /* after the signature */
+  for (;;) {
+    unsigned char head[8];
+    if (std::fseek(file, long(at), SEEK_SET) != 0 || std::fread(head, 1, 8, file) != 8)
+      return cf_error_set(err, CF_EIO,
+                          "%s: a truncated PNG: the file ends at byte %lld, before its IEND chunk",
+                          path, file_size);
+    unsigned long long length =
+        (unsigned long long)head[0] << 24 | head[1] << 16 | head[2] << 8 | head[3];
+    char type[5] = {char(head[4]), char(head[5]), char(head[6]), char(head[7]), 0};
+    for (char &c : type)
+      if (c && !std::isalpha((unsigned char)c)) c = '?';
+    if (length > 0x7fffffffULL)
+      return cf_error_set(err, CF_EPARSE,
+                          "%s: a corrupt PNG: chunk '%s' at byte %lld claims %llu bytes", path,
+                          type, at, length);
+    if (at + 12 + (long long)length > file_size)
+      return cf_error_set(err, CF_EIO,
+                          "%s: a truncated PNG: chunk '%s' at byte %lld needs %llu bytes but the "
+                          "file ends at byte %lld",
+                          path, type, at, length + 12, file_size);
+    at += 12 + (long long)length;
+    if (std::memcmp(head + 4, "IEND", 4) == 0) return CF_OK;
+  }
+}
+
+/* The file at path: a regular file, and if a PNG, whole (check_png_chunks);
+ * if an OpenEXR file, its headers sound (cf_exr_check_headers). */
+cf_status check_file(const char *path, cf_error *err) {
   struct stat st;
   if (stat(path, &st) != 0) {
-    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file", path);
-    return cf_error_set(err, CF_EIO, "%s: %s", path, std::strerror(errno));
+    char hidden[160];
+    cf_path_hidden_characters(path, hidden, sizeof hidden);
+    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file%s", path, hidden);
+    return cf_error_set(err, CF_EIO, "%s: %s%s", path, std::strerror(errno), hidden);
   }
   if (!S_ISREG(st.st_mode)) return cf_error_set(err, CF_EIO, "%s: not a regular file", path);
+  FILE *file = std::fopen(path, "rb");
+  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, std::strerror(errno));
+  static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  unsigned char magic[8];
+  cf_status s = CF_OK;
+  static const unsigned char exr[4] = {0x76, 0x2f, 0x31, 0x01};
+  size_t got = std::fread(magic, 1, 8, file);
+  if (got == 8 && std::memcmp(magic, png, 8) == 0)
+    s = check_png_chunks(path, file, (long long)st.st_size, err);
+  else if (got == 8 && std::memcmp(magic, exr, 4) == 0)
+    s = cf_exr_check_headers(path, file, (long long)st.st_size, err);
+  std::fclose(file);
+  return s;
+}
 
+/* The file opened and its header checked: one 2D, flat image of 1 to 4
+ * channels and at most 2^31 values, whole (data window = display window). */
+cf_status open_checked(const char *path, std::unique_ptr<OIIO::ImageInput> &input, cf_error *err) {
+  cf_status s = check_file(path, err);
+  if (s != CF_OK) return s;
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
-  auto input = OIIO::ImageInput::open(path, &config);
+  input = OIIO::ImageInput::open(path, &config);
   if (!input)
     return cf_error_set(err, CF_EIO, "%s: cannot read this image: %s", path,
                         one_line(OIIO::geterror()).c_str());
@@ -163,8 +223,36 @@ cf_status read_image(const char *path, cf_image *image, cf_image_info *info, cf_
                         "(%d x %d at %d, %d); clayfit reads whole images only",
                         path, spec.width, spec.height, spec.x, spec.y, spec.full_width,
                         spec.full_height, spec.full_x, spec.full_y);
+  return CF_OK;
+}
 
-  cf_status status = cf_image_alloc(image, spec.width, spec.height, spec.nchannels, err);
+cf_status read_header(const char *path, cf_image_header *header, cf_error *err) {
+  std::unique_ptr<OIIO::ImageInput> input;
+  cf_status s = open_checked(path, input, err);
+  if (s != CF_OK) return s;
+  const OIIO::ImageSpec &spec = input->spec();
+  header->width = spec.width;
+  header->height = spec.height;
+  header->channels = spec.nchannels;
+  info_fill(&header->info, *input, spec);
+  input->close();
+  input->geterror();
+  return CF_OK;
+}
+
+/* width, height > 0: the size the header must declare, checked before
+ * any pixel is decoded. */
+cf_status read_image(const char *path, int width, int height, cf_image *image, cf_image_info *info,
+                     cf_error *err) {
+  std::unique_ptr<OIIO::ImageInput> input;
+  cf_status status = open_checked(path, input, err);
+  if (status != CF_OK) return status;
+  const OIIO::ImageSpec &spec = input->spec();
+  if (width > 0 && height > 0 && (spec.width != width || spec.height != height))
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: its header says %d x %d pixels, not the %d x %d expected; not decoded",
+                        path, spec.width, spec.height, width, height);
+  status = cf_image_alloc(image, spec.width, spec.height, spec.nchannels, err);
   if (status != CF_OK) {
     cf_error_prefix(err, "%s", path);
     return status;
@@ -178,6 +266,22 @@ cf_status read_image(const char *path, cf_image *image, cf_image_info *info, cf_
   input->close();
   input->geterror(); /* nothing left pending */
   return CF_OK;
+}
+
+/* What went wrong reading path, from an exception: out of memory is not
+ * a bad input. */
+cf_status read_failed(const char *path, cf_image *image, cf_error *err) {
+  if (image) cf_image_free(image);
+  drain_errors();
+  try {
+    throw;
+  } catch (const std::bad_alloc &) {
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory while decoding it", path);
+  } catch (const std::exception &e) {
+    return cf_error_set(err, CF_EIO, "%s: reading failed: %s", path, e.what());
+  } catch (...) {
+    return cf_error_set(err, CF_EIO, "%s: reading failed (an unknown exception)", path);
+  }
 }
 
 /* ---- writing ---- */
@@ -296,9 +400,13 @@ cf_status write_image(const char *path, const cf_image *image, int bits, const c
                         one_line(output->geterror()).c_str());
   bool ok = output->write_image(OIIO::TypeDesc::FLOAT, image->pixels);
   ok = output->close() && ok;
-  if (!ok)
+  std::string failed = output->geterror(); /* the PNG writer reports a failed write
+                                              (/dev/full, a full disk) only here; the
+                                              TIFF writer leaves a harmless note on
+                                              its EXIF directory there */
+  if (!ok || (kind == Kind::png && !failed.empty()))
     return cf_error_set(err, CF_EIO, "%s: could not write the image: %s", path,
-                        one_line(output->geterror()).c_str());
+                        one_line(failed).c_str());
   return CF_OK;
 }
 
@@ -337,20 +445,31 @@ void cf_image_free(cf_image *image) {
   image->width = image->height = image->channels = 0;
 }
 
-cf_status cf_image_read(const char *path, cf_image *image, cf_image_info *info, cf_error *err) {
+cf_status cf_image_read_sized(const char *path, int width, int height, cf_image *image,
+                              cf_image_info *info, cf_error *err) {
   image->width = image->height = image->channels = 0;
   image->pixels = nullptr;
   info_clear(info);
   if (!path || !path[0]) return cf_error_set(err, CF_EINVAL, "an empty image path");
   try {
-    return read_image(path, image, info, err);
-  } catch (const std::exception &e) {
-    cf_image_free(image);
-    drain_errors();
-    return cf_error_set(err, CF_EIO, "%s: reading failed: %s", path, e.what());
+    return read_image(path, width, height, image, info, err);
   } catch (...) {
-    cf_image_free(image);
-    return cf_error_set(err, CF_EIO, "%s: reading failed (an unknown exception)", path);
+    return read_failed(path, image, err);
+  }
+}
+
+cf_status cf_image_read(const char *path, cf_image *image, cf_image_info *info, cf_error *err) {
+  return cf_image_read_sized(path, 0, 0, image, info, err);
+}
+
+cf_status cf_image_read_header(const char *path, cf_image_header *header, cf_error *err) {
+  header->width = header->height = header->channels = 0;
+  info_clear(&header->info);
+  if (!path || !path[0]) return cf_error_set(err, CF_EINVAL, "an empty image path");
+  try {
+    return read_header(path, header, err);
+  } catch (...) {
+    return read_failed(path, nullptr, err);
   }
 }
 

@@ -1,8 +1,12 @@
 /* The pixel loop of a capture: for every pixel of image k that sees the
  * sphere clear of its silhouette (and is inside the mask, if any), decode
  * the photo's value to linear radiance and record the observation: normal,
- * view, every light's direction and irradiance, RGB, flags. */
+ * view, every light's direction and irradiance, RGB, flags. Then the
+ * screen of the whole capture: values that cannot be radiance left out,
+ * and a capture with nothing lit and positive to fit refused. */
 #include <math.h>
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -38,13 +42,13 @@ static cf_status reserve(cf_capture *capture, size_t extra, cf_error *err) {
 /* Is pixel (x, y) inside the mask (first channel > 0.5)? */
 static int in_mask(const cf_image *mask, int x, int y) {
   if (!mask || !mask->pixels) return 1;
-  return mask->pixels[((size_t)y * (size_t)mask->width + (size_t)x) * (size_t)mask->channels] >
-         0.5f;
+  return capture_mask_usable(
+      mask->pixels[((size_t)y * (size_t)mask->width + (size_t)x) * (size_t)mask->channels]);
 }
 
 /* Every light slot's direction and irradiance at a surface point seen in
  * image k (zero for the slots the image does not use); 1 if some light
- * reaches it (n·l > 0). */
+ * reaches it (n·l > 0 and some irradiance). */
 static int lights_at(const cf_capture *capture, size_t k, const surface_point *point,
                      double *light_dir, double *irradiance) {
   const capture_view *view = &capture->views[k];
@@ -57,7 +61,8 @@ static int lights_at(const cf_capture *capture, size_t k, const surface_point *p
     memset(e, 0, 3 * sizeof *e);
     if (j >= lights || !cf_light_at(&image_lights[j], view->r, view->c, point->position, l, e))
       continue;
-    lit |= l[0] * point->normal[0] + l[1] * point->normal[1] + l[2] * point->normal[2] > 0.0;
+    lit |= l[0] * point->normal[0] + l[1] * point->normal[1] + l[2] * point->normal[2] > 0.0 &&
+           e[0] + e[1] + e[2] > 0.0;
   }
   return lit;
 }
@@ -127,4 +132,256 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
     }
   }
   return CF_OK;
+}
+
+/* ---- The screen: values that cannot be radiance (docs/captures.md) ----
+ * A channel is not radiance when it is below −NOISE_SIGMAS σ₀, σ₀ the
+ * photo's noise at radiance 0 (the capture's read noise, or without a
+ * noise model FALLBACK_NOISE times the image's bright level), or above
+ * ABSURD times that level. The bright level is the BRIGHT_QUANTILE of the
+ * image's positive values: robust to a tenth of them being wrong. */
+#define NOISE_SIGMAS 5.0 /* Gaussian noise beyond 5 σ: 3e-7 of the values */
+/* generous: raw photos' read noise is 0.1-1 % of full scale, so only values
+ * far below any camera's noise are left out (-10 % of the bright level) */
+#define FALLBACK_NOISE 0.02
+#define BRIGHT_QUANTILE 0.9
+/* the ladder's sharpest, strongest lobe (roughness 0.03, F0 0.25) peaks at
+ * 7.7e4 times a white diffuse surface (clayfit eval): room for albedo 1e-4 */
+#define ABSURD 1e9
+#define MOST 0.5 /* more than half of the capture: the decoding is wrong */
+
+/* The q-quantile of values[0..n) (n > 0; reordered): Wirth's selection. */
+static double quantile(double *values, size_t n, double q) {
+  const ptrdiff_t k = (ptrdiff_t)(q * (double)(n - 1));
+  ptrdiff_t lo = 0, hi = (ptrdiff_t)n - 1;
+  while (lo < hi) {
+    const double pivot = values[k];
+    ptrdiff_t i = lo, j = hi;
+    do {
+      while (values[i] < pivot) ++i;
+      while (pivot < values[j]) --j;
+      if (i <= j) {
+        double t = values[i];
+        values[i++] = values[j];
+        values[j--] = t;
+      }
+    } while (i <= j);
+    if (j < k) lo = i;
+    if (k < i) hi = j;
+  }
+  return values[k];
+}
+
+/* The bounds of radiance for observations [begin, end) of one image. */
+typedef struct radiance_bounds {
+  double low, high, sigma, bright;
+  int sigma_from_capture;
+} radiance_bounds;
+
+static cf_status bounds_of(const cf_capture *capture, size_t begin, size_t end, radiance_bounds *b,
+                           cf_error *err) {
+  const double *rgb = capture->obs.rgb;
+  size_t n = 0;
+  double *positive = malloc(3 * (end - begin) * sizeof *positive + 1);
+  if (!positive) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t i = 3 * begin; i < 3 * end; ++i)
+    if (rgb[i] > 0.0) positive[n++] = rgb[i];
+  b->bright = n ? quantile(positive, n, BRIGHT_QUANTILE) : 0.0;
+  free(positive);
+  const cf_capture_spec *spec = &capture->spec;
+  b->sigma_from_capture = spec->has_noise && spec->noise_read > 0.0;
+  b->sigma = b->sigma_from_capture ? spec->noise_read : FALLBACK_NOISE * b->bright;
+  b->low = -NOISE_SIGMAS * b->sigma;
+  b->high = b->bright > 0.0 ? ABSURD * b->bright : INFINITY;
+  return CF_OK;
+}
+
+/* Copy observation `from` over `to` (to < from). */
+static void move_observation(cf_observations *o, size_t to, size_t from) {
+  const size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
+  memcpy(o->normal + 3 * to, o->normal + 3 * from, 3 * sizeof *o->normal);
+  memcpy(o->view + 3 * to, o->view + 3 * from, 3 * sizeof *o->view);
+  memcpy(o->light_dir + 3 * slots * to, o->light_dir + 3 * slots * from,
+         3 * slots * sizeof *o->light_dir);
+  memcpy(o->irradiance + 3 * slots * to, o->irradiance + 3 * slots * from,
+         3 * slots * sizeof *o->irradiance);
+  memcpy(o->rgb + 3 * to, o->rgb + 3 * from, 3 * sizeof *o->rgb);
+  o->flags[to] = o->flags[from];
+  o->image[to] = o->image[from];
+  memcpy(o->pixel + 2 * to, o->pixel + 2 * from, 2 * sizeof *o->pixel);
+}
+
+/* What was left out of one image, for its warning. */
+typedef struct left_out_counts {
+  size_t low, high;
+  double lowest, highest;
+  float at[2]; /* the first such pixel's centre */
+} left_out_counts;
+
+static void warn_left_out(cf_capture *capture, size_t k, const radiance_bounds *b,
+                          const left_out_counts *out) {
+  const cf_capture_image *info = &capture->images[k];
+  size_t total = info->observations + info->not_radiance;
+  char low[256] = "", high[160] = "";
+  if (out->low && b->sigma_from_capture)
+    snprintf(low, sizeof low,
+             "; %zu with a value below %g (%g sigma, the capture's read noise %g; lowest %g)",
+             out->low, b->low, NOISE_SIGMAS, b->sigma, out->lowest);
+  else if (out->low)
+    snprintf(low, sizeof low,
+             "; %zu with a value below %g (%g sigma, sigma %g %% of the image's bright level %g; "
+             "lowest %g)",
+             out->low, b->low, NOISE_SIGMAS, 100.0 * FALLBACK_NOISE, b->bright, out->lowest);
+  if (out->high)
+    snprintf(high, sizeof high, "; %zu above %g (%g times the bright level; highest %g)", out->high,
+             b->high, ABSURD, out->highest);
+  capture_warn(capture,
+               "%s: %zu of its %zu pixels on the sphere (%.2g %%) hold values that cannot be "
+               "radiance and are left out of the fit%s%s; the first at pixel (%.0f, %.0f). "
+               "Check the black level, the encoding and the file",
+               capture->spec.image_paths[k], info->not_radiance, total,
+               100.0 * (double)info->not_radiance / (double)total, low, high, out->at[0] - 0.5,
+               out->at[1] - 0.5);
+}
+
+/* Leave out image k's observations [begin, end) that hold a value that is
+ * not radiance, moving the rest down to *kept. */
+static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_t end, size_t *kept,
+                              cf_error *err) {
+  cf_observations *o = &capture->obs;
+  cf_capture_image *info = &capture->images[k];
+  radiance_bounds b = {0.0, 0.0, 0.0, 0.0, 0};
+  cf_status s = bounds_of(capture, begin, end, &b, err);
+  if (s != CF_OK) return s;
+  left_out_counts out = {0, 0, 0.0, 0.0, {0.0f, 0.0f}};
+  for (size_t i = begin; i < end; ++i) {
+    int low = 0, high = 0;
+    for (int c = 0; c < 3; ++c) {
+      double v = o->rgb[3 * i + c];
+      if (v < b.low) low = 1, out.lowest = fmin(out.lowest, v);
+      if (v > b.high) high = 1, out.highest = fmax(out.highest, v);
+    }
+    if (low || high) {
+      if (out.low + out.high == 0) memcpy(out.at, o->pixel + 2 * i, sizeof out.at);
+      out.low += (size_t)low;
+      out.high += (size_t)(high && !low);
+      info->clipped -= (o->flags[i] & CF_OBS_CLIPPED) != 0;
+      continue;
+    }
+    if (*kept != i) move_observation(o, *kept, i);
+    ++*kept;
+  }
+  info->not_radiance = out.low + out.high;
+  info->observations -= info->not_radiance;
+  if ((double)info->not_radiance > CF_NOT_RADIANCE_TRACE * (double)(end - begin))
+    warn_left_out(capture, k, &b, &out);
+  return CF_OK;
+}
+
+/* A point light or flash closer to the sphere's centre than its radius:
+ * its image's name, its index and that distance (0 when there is none). */
+static int light_inside(const cf_capture *capture, size_t *image, int *light, double *distance) {
+  if (!(capture->radius > 0.0)) return 0;
+  for (size_t k = 0; k < capture->spec.num_images; ++k)
+    for (int j = 0; j < capture->light_counts[k]; ++j) {
+      const cf_light *l = &capture->lights[k * (size_t)capture->max_lights + (size_t)j];
+      if (l->kind == CF_LIGHT_DIRECTIONAL) continue;
+      double p[3];
+      for (int a = 0; a < 3; ++a) {
+        p[a] = l->position[a];
+        if (l->kind == CF_LIGHT_FLASH) { /* C + Rᵀ t */
+          const double *r = capture->views[k].r;
+          p[a] = capture->views[k].c[a] + r[a] * l->position[0] + r[3 + a] * l->position[1] +
+                 r[6 + a] * l->position[2];
+        }
+      }
+      double d = sqrt((p[0] - capture->center[0]) * (p[0] - capture->center[0]) +
+                      (p[1] - capture->center[1]) * (p[1] - capture->center[1]) +
+                      (p[2] - capture->center[2]) * (p[2] - capture->center[2]));
+      if (d < capture->radius) {
+        *image = k, *light = j, *distance = d;
+        return 1;
+      }
+    }
+  return 0;
+}
+
+/* How many observations some light reaches with some irradiance, how many
+ * are lit (n·l > 0 as well) and of those how many measure a positive value. */
+typedef struct usable {
+  size_t irradiated, lit, positive;
+} usable;
+
+static usable count_usable(const cf_observations *o) {
+  usable u = {0, 0, 0};
+  const size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
+  for (size_t i = 0; i < o->count; ++i) {
+    const double *e = o->irradiance + 3 * slots * i;
+    int irradiated = 0;
+    for (size_t j = 0; j < 3 * slots; ++j) irradiated |= e[j] > 0.0;
+    u.irradiated += (size_t)irradiated;
+    if (o->flags[i] & CF_OBS_UNLIT) continue;
+    ++u.lit;
+    const double *y = o->rgb + 3 * i;
+    u.positive += y[0] > 0.0 || y[1] > 0.0 || y[2] > 0.0;
+  }
+  return u;
+}
+
+/* Refuse a capture whose observations leave nothing to fit, saying why. */
+static cf_status check_usable(const cf_capture *capture, size_t total, size_t left_out,
+                              cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  const cf_observations *o = &capture->obs;
+  if ((double)left_out > MOST * (double)total)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: colour: %zu of the %zu pixels on the sphere (%.3g %%) hold values "
+                        "that cannot be radiance (far below 0, or absurdly large; each image's "
+                        "count is in the warnings): the decoding is wrong (black_level %g?) or "
+                        "the photos are not radiance",
+                        spec->path, left_out, total, 100.0 * (double)left_out / (double)total,
+                        spec->black_level);
+  usable u = count_usable(o);
+  if (u.irradiated == 0)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: lights: no light reaches the sphere: every light gives zero "
+                        "irradiance at all %zu observations of the %zu images (are the lights' "
+                        "intensities 0?)",
+                        spec->path, o->count, spec->num_images);
+  size_t k = 0;
+  int j = 0;
+  double distance = 0.0;
+  if (u.lit == 0 && light_inside(capture, &k, &j, &distance))
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: lights: no observation is lit: at all %zu observations every light "
+                        "is behind the surface; light %d of %s is inside the sphere (%g from "
+                        "its centre, radius %g)",
+                        spec->path, o->count, j + 1, spec->image_names[k], distance,
+                        capture->radius);
+  if (u.lit == 0)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: lights: no observation is lit: at all %zu observations of the %zu "
+                        "images every light is behind the surface (n.l <= 0)",
+                        spec->path, o->count, spec->num_images);
+  if (u.positive == 0)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: colour: none of the %zu lit observations measures a positive value "
+                        "(after black_level %g is subtracted): nothing to fit",
+                        spec->path, u.lit, spec->black_level);
+  return CF_OK;
+}
+
+cf_status capture_screen_observations(cf_capture *capture, cf_error *err) {
+  cf_observations *o = &capture->obs;
+  size_t total = o->count, kept = 0, begin = 0, left_out = 0;
+  while (begin < total) {
+    size_t k = o->image[begin], end = begin;
+    while (end < total && o->image[end] == k) ++end;
+    cf_status s = screen_image(capture, k, begin, end, &kept, err);
+    if (s != CF_OK) return s;
+    left_out += capture->images[k].not_radiance;
+    begin = end;
+  }
+  o->count = kept;
+  return check_usable(capture, total, left_out, err);
 }

@@ -6,6 +6,8 @@
 
 #include <stdio.h>
 
+#include "clayfit/status.h"
+
 enum { CLI_EXIT_OK = 0, CLI_EXIT_FAILURE = 1, CLI_EXIT_USAGE = 2 };
 
 typedef struct cli_context {
@@ -30,6 +32,15 @@ void cli_progress(void *user, const char *stage, size_t done, size_t total);
 /* The model ladder and every parameter (name, unit, default, range,
  * meaning), from the single table in clayfit/model.h. */
 void cli_print_model_table(FILE *out);
+
+/* --max-image-memory GB (fit, inspect, report): the cap on a capture's
+ * decoded image data (cf_capture_options.max_image_bytes), GB = 10^9
+ * bytes, in (0, 1e9]. */
+#define CLI_IMAGE_MEMORY_USAGE                                                     \
+  "  --max-image-memory GB  the most decoded image data a capture may hold, all\n" \
+  "                     images together (default 32; checked from the files'\n"    \
+  "                     headers before decoding)\n"
+cf_status cli_parse_image_memory(const char *text, unsigned long long *bytes, cf_error *err);
 
 /* Report an error on stderr as "clayfit <command>: <message>". */
 void cli_report(const char *command, const char *message);

@@ -28,6 +28,7 @@
 #include "cli.h"
 #include "core/clock.h"
 #include "core/file.h"
+#include "out_path.h"
 
 enum { MAX_CAPTURES = 8, MAX_BUDGETS = 8, MAX_RUNS = 256 };
 
@@ -485,6 +486,9 @@ int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {
   if (exit_status >= 0) return exit_status;
   cf_model_id forced = CF_MODEL_CLAY;
   if (s == CF_OK && a.model_text) s = cf_model_find(a.model_text, &forced, &err);
+  if (s == CF_OK) s = cli_check_output("--work", a.work, CLI_OUT_FOLDER, &err);
+  if (s == CF_OK) s = cf_make_dirs(a.work, &err); /* --json may be in it */
+  if (s == CF_OK && a.json_path) s = cli_check_output("--json", a.json_path, CLI_OUT_FILE, &err);
   bench_capture captures[MAX_CAPTURES];
   int count = 0;
   if (s == CF_OK) s = prepare_captures(&a, forced, ctx, captures, &count, &err);

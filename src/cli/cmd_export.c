@@ -7,6 +7,7 @@
 #include "clayfit/export.h"
 #include "clayfit/fit_file.h"
 #include "cli.h"
+#include "out_path.h"
 
 static void export_usage(FILE *out) {
   fprintf(out,
@@ -22,7 +23,8 @@ static void export_usage(FILE *out) {
           "  mitsuba       a Mitsuba 3 scene fragment (diffuse, roughplastic or principled)\n"
           "No target has every term of the models: each file says in a comment (glTF: in\n"
           "asset.extras) what maps exactly, approximately, and what is dropped; a value a\n"
-          "target cannot take is a warning on stderr (--quiet silences warnings).\n");
+          "target cannot take is a warning on stderr (--quiet silences warnings).\n"
+          "PATH's folder must exist and be writable (checked before FIT.json is read).\n");
 }
 
 int cmd_export(int argc, char **argv, cli_context *ctx) {
@@ -56,14 +58,16 @@ int cmd_export(int argc, char **argv, cli_context *ctx) {
   const char *fit_path = argv[optind];
   cf_error err = {0};
   cf_export_format format;
-  if (cf_export_format_find(format_text, &format, &err) != CF_OK) {
+  if (cf_export_format_find(format_text, &format, &err) != CF_OK ||
+      cli_check_output("-o", output, CLI_OUT_FILE, &err) != CF_OK) {
     cli_report("export", err.message);
     return CLI_EXIT_USAGE;
   }
   cf_fit_file fit;
-  if (cf_fit_file_read(fit_path, &fit, &err) != CF_OK) {
+  cf_status read = cf_fit_file_read(fit_path, &fit, &err);
+  if (read != CF_OK) {
     cli_report("export", err.message);
-    return CLI_EXIT_USAGE;
+    return read == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
   cf_export_warnings warnings = {0};
   cf_status s = cf_export_write(&fit, fit_path, format, output, &warnings, &err);

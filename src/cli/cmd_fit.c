@@ -1,8 +1,11 @@
 /* clayfit fit: a capture's observations to fitted material parameters with
  * their uncertainty, written to OUTDIR/fit.json. */
+#define _XOPEN_SOURCE 700 /* realpath (XSI) */
 #include <getopt.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "args.h"
@@ -12,6 +15,8 @@
 #include "cli.h"
 #include "core/clock.h"
 #include "core/file.h"
+#include "core/text_escape.h"
+#include "out_path.h"
 
 enum { MAX_ASSIGNMENTS = 64 };
 
@@ -59,7 +64,8 @@ static void fit_usage(FILE *out) {
           "  --max-iterations N  per solve (default 100)\n"
           "  --trace             every iteration of every solve on stderr, with the\n"
           "                      solver's decisions around it (to study convergence)\n"
-          "  --threads N         solver threads (default 2)\n");
+          "  --threads N         solver threads (default 2)\n"
+          CLI_IMAGE_MEMORY_USAGE);
 }
 
 /* --hold and --free into one model's options. With known (the model
@@ -234,6 +240,7 @@ typedef struct fit_command {
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
   int hold_count, free_count;
   int trace; /* --trace: the solver's lines on stderr */
+  unsigned long long max_image_bytes; /* --max-image-memory, 0: the default */
   fit_settings set;
 } fit_command;
 
@@ -354,6 +361,7 @@ static const struct option fit_long_options[] = {
     {"budget", required_argument, NULL, 'B'},
     {"sampling", required_argument, NULL, 'S'},
     {"trace", no_argument, NULL, 'R'},
+    {"max-image-memory", required_argument, NULL, 'G'},
     {0}};
 
 /* The command line into cmd. Returns -1 to go on, else the exit status
@@ -395,6 +403,8 @@ static int parse_command(int argc, char **argv, fit_command *cmd, cf_status *s, 
       cmd->set.multistart = 0;
     } else if (c == 'R') {
       cmd->trace = 1;
+    } else if (c == 'G') {
+      *s = cli_parse_image_memory(optarg, &cmd->max_image_bytes, err);
     } else if (c == 'h') {
       fit_usage(stdout);
       return CLI_EXIT_OK;
@@ -418,25 +428,32 @@ static void trace_line(void *user, const char *line) {
   fprintf(stderr, "clayfit fit: %s: %s\n", cf_model_info_get(o->model)->code, line);
 }
 
-/* Each model's options: the ladder's (--model auto) or the one forced. */
+/* Each model's options: the ladder's (--model auto) or the one forced;
+ * a held value out of its range refused before any work. */
 static cf_status fit_options(const fit_command *cmd, int *automatic, cf_model_id *model,
                              cf_fit_options ladder[CF_MODEL_COUNT], cf_error *err) {
   *automatic = strcmp(cmd->model_text, "auto") == 0;
   *model = CF_MODEL_CLAY;
-  if (*automatic)
-    return ladder_options(&cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count,
-                          ladder, err);
-  cf_status s = cf_model_find(cmd->model_text, model, err);
+  cf_status s = CF_OK;
+  if (*automatic) {
+    s = ladder_options(&cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count, ladder,
+                       err);
+    for (int m = 0; s == CF_OK && m < CF_MODEL_COUNT; ++m)
+      s = cf_fit_check_options(&ladder[m], err);
+    return s;
+  }
+  s = cf_model_find(cmd->model_text, model, err);
   if (s == CF_OK)
     s = model_options(*model, &cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count,
                       NULL, &ladder[*model], err);
+  if (s == CF_OK) s = cf_fit_check_options(&ladder[*model], err);
   return s;
 }
 
 /* The capture loaded, its warnings on stderr. */
-static cf_status load_capture(const char *path, const cli_context *ctx, cf_capture **capture,
-                              cf_error *err) {
-  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "fit"};
+static cf_status load_capture(const char *path, unsigned long long max_image_bytes,
+                              const cli_context *ctx, cf_capture **capture, cf_error *err) {
+  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "fit", max_image_bytes};
   cf_status s = cf_capture_load(path, &load_options, capture, err);
   if (s != CF_OK) return s;
   cf_capture_summary summary;
@@ -470,6 +487,21 @@ static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
   return CF_OK;
 }
 
+/* fit.json records the capture's path relative to its own folder (`..`s
+ * and the folders of the capture's real path) as JSON text, which must be
+ * UTF-8: a capture whose real path is not could not be recorded so that
+ * report and export find it, so it is refused before the work. */
+static cf_status check_recordable(const char *capture_path, cf_error *err) {
+  char real[PATH_MAX], valid[PATH_MAX * 3 + 1];
+  if (!realpath(capture_path, real)) return CF_OK; /* loading says why */
+  if (text_escape_utf8(valid, sizeof valid, real) == strlen(real) && strcmp(valid, real) == 0)
+    return CF_OK;
+  return cf_error_set(err, CF_EINVAL,
+                      "%s: the capture's path is not UTF-8 text, so fit.json could not record "
+                      "where the capture is (rename its folders or file)",
+                      valid);
+}
+
 int cmd_fit(int argc, char **argv, cli_context *ctx) {
   fit_command cmd;
   cf_error err = {0};
@@ -480,6 +512,8 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
   cf_model_id model = CF_MODEL_CLAY;
   cf_fit_options ladder[CF_MODEL_COUNT];
   if (s == CF_OK) s = fit_options(&cmd, &automatic, &model, ladder, &err);
+  if (s == CF_OK) s = cli_check_output_in("-o", cmd.out_dir, "fit.json", &err);
+  if (s == CF_OK) s = check_recordable(cmd.capture_path, &err);
   if (s != CF_OK) {
     cli_report("fit", err.message);
     return CLI_EXIT_USAGE;
@@ -487,7 +521,7 @@ int cmd_fit(int argc, char **argv, cli_context *ctx) {
 
   double start = cf_now_seconds();
   cf_capture *capture = NULL;
-  s = load_capture(cmd.capture_path, ctx, &capture, &err);
+  s = load_capture(cmd.capture_path, cmd.max_image_bytes, ctx, &capture, &err);
   if (s != CF_OK) {
     cli_report("fit", err.message);
     return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;

@@ -6,6 +6,7 @@
 #include "args.h"
 #include "clayfit/synth.h"
 #include "cli.h"
+#include "out_path.h"
 
 static void synth_usage(FILE *out) {
   fprintf(out,
@@ -186,6 +187,7 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
   int exit_status = parse_synth_args(argc, argv, &a, &o, &s, &err);
   if (exit_status >= 0) return exit_status;
   if (s == CF_OK) s = synth_params(&a, &o, &err);
+  if (s == CF_OK) s = cli_check_output("-o", a.dir, CLI_OUT_FOLDER, &err);
   if (s != CF_OK) {
     cli_report("synth", err.message);
     return CLI_EXIT_USAGE;

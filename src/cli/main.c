@@ -4,6 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "args.h"
 #include "cli.h"
 
 typedef struct command {
@@ -32,6 +33,15 @@ int cli_bad_option(const char *command_name, char **argv) {
   fprintf(stderr, "clayfit %s: unknown option or missing value in '%s' (see clayfit %s --help)\n",
           command_name, argv[optind - 1], command_name);
   return CLI_EXIT_USAGE;
+}
+
+cf_status cli_parse_image_memory(const char *text, unsigned long long *bytes, cf_error *err) {
+  double gb = 0.0;
+  cf_status s = cli_parse_number(text, "--max-image-memory", &gb, err);
+  if (s == CF_OK && !(gb > 0.0 && gb <= 1e9))
+    s = cf_error_set(err, CF_ERANGE, "--max-image-memory: %g GB is outside (0, 1e9]", gb);
+  if (s == CF_OK) *bytes = (unsigned long long)(gb * 1e9) > 0 ? (unsigned long long)(gb * 1e9) : 1;
+  return s;
 }
 
 void cli_progress(void *user, const char *stage, size_t done, size_t total) {

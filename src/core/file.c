@@ -16,8 +16,10 @@ cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *s
   *size = 0;
   struct stat st;
   if (stat(path, &st) != 0) {
-    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file", path);
-    return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+    char hidden[160];
+    cf_path_hidden_characters(path, hidden, sizeof hidden);
+    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file%s", path, hidden);
+    return cf_error_set(err, CF_EIO, "%s: %s%s", path, strerror(errno), hidden);
   }
   if (!S_ISREG(st.st_mode)) return cf_error_set(err, CF_EIO, "%s: not a regular file", path);
   if ((unsigned long long)st.st_size > (unsigned long long)max_size)
@@ -41,6 +43,52 @@ cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *s
   buffer[got] = '\0';
   *data = buffer;
   *size = got;
+  return CF_OK;
+}
+
+void cf_path_hidden_characters(const char *path, char *out, size_t size) {
+  if (size) out[0] = '\0';
+  const unsigned char *p = (const unsigned char *)path;
+  for (size_t i = 0; p[i]; ++i) {
+    const char *what = NULL;
+    if (p[i] == 0xEF && p[i + 1] == 0xBB && p[i + 2] == 0xBF)
+      what = "a UTF-8 byte-order mark (U+FEFF, bytes EF BB BF)";
+    else if (p[i] == 0xC2 && p[i + 1] == 0xA0)
+      what = "a no-break space (U+00A0)";
+    else if (p[i] == 0xE2 && p[i + 1] == 0x80 && p[i + 2] >= 0x8B && p[i + 2] <= 0x8F)
+      what = "a zero-width character (U+200B to U+200F)";
+    else if (p[i] < 0x20 || p[i] == 0x7F) {
+      snprintf(out, size, " (the name holds the control character 0x%02X at byte %zu)", p[i], i);
+      return;
+    } else if (p[i] == ' ' && (i == 0 || p[i + 1] == '\0' || p[i - 1] == '/' || p[i + 1] == '/'))
+      what = "a space at the start or end of a name";
+    if (what) {
+      snprintf(out, size, " (the name holds %s at byte %zu)", what, i);
+      return;
+    }
+  }
+}
+
+cf_status cf_read_text_file(const char *path, size_t max_size, char **data, size_t *size,
+                            cf_error *err) {
+  cf_status s = cf_read_file(path, max_size, data, size, err);
+  if (s != CF_OK) return s;
+  const char *nul = memchr(*data, '\0', *size);
+  if (nul) {
+    size_t offset = (size_t)(nul - *data), line = 1;
+    for (const char *p = *data; p < nul; ++p) line += *p == '\n';
+    free(*data);
+    *data = NULL;
+    *size = 0;
+    return cf_error_set(err, CF_EPARSE,
+                        "%s:%zu: a NUL byte at byte offset %zu; a text file holds none (is it "
+                        "UTF-16, or not text?)",
+                        path, line, offset);
+  }
+  if (*size >= 3 && memcmp(*data, "\xEF\xBB\xBF", 3) == 0) { /* a UTF-8 byte-order mark */
+    memmove(*data, *data + 3, *size - 3 + 1);
+    *size -= 3;
+  }
   return CF_OK;
 }
 

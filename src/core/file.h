@@ -14,6 +14,19 @@
  * before anything is allocated). Messages name the file. */
 cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size, cf_error *err);
 
+/* cf_read_file for a text file: CF_EPARSE naming the line and byte offset
+ * of a NUL byte (a text file holds none: UTF-16 or a binary file), and a
+ * leading UTF-8 byte-order mark removed (an encoding marker, not text). */
+cf_status cf_read_text_file(const char *path, size_t max_size, char **data, size_t *size,
+                            cf_error *err);
+
+/* For messages about a path that was not found: " (the name holds a
+ * UTF-8 byte-order mark (U+FEFF, bytes EF BB BF) at byte 7)" when it holds
+ * a character that prints as nothing (a byte-order mark, a control
+ * character, a no-break or zero-width space, a space at either end of a
+ * name); else "". Into out (size bytes). */
+void cf_path_hidden_characters(const char *path, char *out, size_t size);
+
 /* Write `size` bytes to `path` (created or replaced) so that a reader never
  * sees it half-written: into a temporary file beside it, every write, the
  * flush to the disk and the close checked, then renamed into place; on an

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/file.h"
+#include "core/text_escape.h"
 
 void json_at_path(const json_at *at, char *out, size_t size) {
   /* collect the chain root-first */
@@ -44,6 +45,13 @@ cf_status json_load_object(const char *path, size_t max_size, json_t **root, cf_
   json_error_t error;
   *root = json_loadb(text, size, JSON_REJECT_DUPLICATES, &error);
   free(text);
+  /* Jansson 2.14 leaves the error empty when an allocation fails */
+  if (!*root && (json_error_code(&error) == json_error_out_of_memory || !error.text[0]))
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory while parsing its %zu bytes of JSON",
+                        path, size);
+  if (!*root && json_error_code(&error) == json_error_null_character)
+    return cf_error_set(err, CF_EPARSE, "%s:%d:%d: a string holds \\u0000 (NUL): not accepted",
+                        path, error.line, error.column);
   if (!*root)
     return cf_error_set(err, CF_EPARSE, "%s:%d:%d: invalid JSON: %s", path, error.line,
                         error.column, error.text);
@@ -165,10 +173,11 @@ cf_status json_as_number(const json_t *value, const json_at *at, double lo, doub
     *out = x;
     return CF_OK;
   }
-  /* the open-ended ranges in words */
-  if (hi >= 1e300 && lo > 0.0 && lo <= 1e-300)
+  /* the open-ended ranges in words, for a value on the wrong side of 0;
+   * beyond their real ends (1e300), the real range */
+  if (hi >= 1e300 && lo > 0.0 && lo <= 1e-300 && x <= 0.0)
     return json_fail(at, err, CF_ERANGE, "%.17g must be greater than 0", x);
-  if (hi >= 1e300 && lo == 0.0)
+  if (hi >= 1e300 && lo == 0.0 && x < 0.0)
     return json_fail(at, err, CF_ERANGE, "%.17g must be 0 or greater", x);
   return json_fail(at, err, CF_ERANGE, "%.17g is outside [%g, %g]", x, lo, hi);
 }
@@ -240,4 +249,11 @@ cf_status json_write_file(const json_t *doc, const char *path, size_t flags, cf_
   cf_status s = cf_write_file(path, text, strlen(text), err);
   free(text);
   return s;
+}
+
+json_t *json_text(const char *text) {
+  char *valid = text_escape_alloc(text_escape_utf8, text);
+  json_t *string = valid ? json_string(valid) : NULL;
+  free(valid);
+  return string;
 }

@@ -20,6 +20,11 @@
  * one way clayfit writes a JSON file. */
 cf_status json_write_file(const json_t *doc, const char *path, size_t flags, cf_error *err);
 
+/* A JSON string of untrusted text (a path, a name from a capture), which
+ * may not be UTF-8 as Jansson requires: each byte of invalid UTF-8 becomes
+ * U+FFFD (text_escape_utf8). NULL text is "". NULL if out of memory. */
+json_t *json_text(const char *text);
+
 /* Where a value is: the file and its JSON path. Nodes chain on the stack. */
 typedef struct json_at {
   const char *file;

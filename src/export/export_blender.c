@@ -115,7 +115,7 @@ static void write_script(export_text *t, const cf_fit_file *fit, const char *fit
                          const export_material *m, const export_notes *n, const blender_inputs *b) {
   export_printf(t, "# Blender 4 (bpy): builds the material with a Principled BSDF.\n");
   export_printf(t, "# Run it in Blender's Python console or: blender --python THIS_FILE\n#\n");
-  export_provenance(t, fit, fit_path, "# ");
+  export_provenance(t, fit, fit_path, "# ", text_escape_python_comment);
   export_printf(t, "#\n");
   export_notes_write(t, n, "# ");
   export_printf(t, "\nimport bpy\n\nNAME = \"clayfit_%s\"\n\n", m->info->name);

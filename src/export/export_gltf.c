@@ -209,7 +209,7 @@ cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *
   if (uri) snprintf(uri, uri_size, "data:application/octet-stream;base64,%s", data);
   free(data);
   export_text prov = {0};
-  export_provenance(&prov, fit, fit_path, "");
+  export_provenance(&prov, fit, fit_path, "", text_escape_utf8);
   json_t *doc = NULL;
   if (uri && !prov.failed) {
     float nmin[3] = {-1, -1, -1}, nmax[3] = {1, 1, 1};

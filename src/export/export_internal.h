@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "clayfit/export.h"
+#include "core/text_escape.h"
 
 #define EXPORT_PI 3.14159265358979323846
 
@@ -22,6 +23,9 @@ void export_printf(export_text *t, const char *format, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+/* Untrusted text (a name, a path: from fit.json or the command line)
+ * escaped for the file's syntax (core/text_escape.h). */
+void export_escaped(export_text *t, text_escape_fn escape, const char *text);
 /* Write the text to path and free it. */
 cf_status export_text_write(export_text *t, const char *path, cf_error *err);
 void export_text_free(export_text *t);
@@ -85,9 +89,12 @@ typedef struct export_material {
 
 void export_material_from_fit(const cf_fit_file *fit, export_material *m);
 
-/* One line of provenance: clayfit version, fit file, model, capture. */
+/* Three lines of provenance: clayfit version, fit file, model, capture;
+ * every line starts with `prefix`, and the text from fit.json and the fit
+ * file's path are escaped with `escape` (the syntax of a comment, or
+ * text_escape_utf8 for a JSON string). */
 void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                       const char *prefix);
+                       const char *prefix, text_escape_fn escape);
 
 /* The common notes: roughness convention, σ and the film's colour. */
 void export_common_notes(export_notes *n, const export_material *m);

@@ -65,10 +65,13 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
   struct tm utc;
   gmtime_r(&now, &utc);
   strftime(exported, sizeof exported, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  /* The paths come from the command line and may not be UTF-8 (json_text);
+   * the strings read from fit.json are UTF-8 already. json_pack takes the
+   * "o" values, also when it fails. */
   json_t *doc = json_pack(
       "{s:i, s:{s:s, s:s}, s:o, s:o, s:{s:s, s:s, s:s, s:s, s:s}, "
       "s:{s:f, s:f, s:I, s:{s:f, s:f, s:b}, s:{s:f, s:f, s:b}, s:{s:s, s:f}}, "
-      "s:{s:s, s:s, s:s, s:s, s:s, s:{s:s, s:s, s:s}}}",
+      "s:{s:s, s:s, s:o, s:s, s:s, s:{s:o, s:s, s:s}}}",
       "clayfit_preset", 1, "model", "code", m->code, "name", m->name, "params", params, "derived",
       derived, "conventions", "brdf",
       "f(l, v) per linear-RGB channel in 1/sr (not f cos), as clayfit eval prints it", "roughness",
@@ -76,14 +79,13 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
       "normal-incidence reflectance; eta = (1 + sqrt(F0)) / (1 - sqrt(F0))", "base_f0",
       "M4: reflectance of the film-to-clay interface, relative to the film", "model",
       "docs/model.md of clayfit " CLAYFIT_EXPORT_VERSION, "fit", "rmse", r->rmse, "relative_rmse",
-      r->relative_rmse, "residuals",
-      (json_int_t)r->residuals, "scale", "value", r->scale, "sd", r->scale_sd, "fitted",
-      r->scale_fitted, "response", "value", r->response, "sd", r->response_sd, "fitted",
-      r->response_fitted, "loss", "type", fit->loss, "scale_sigma", fit->loss_scale, "provenance",
-      "clayfit_version", CLAYFIT_EXPORT_VERSION, "exported", exported, "fit_file",
-      fit_path ? fit_path : "", "fit_clayfit_version", fit->clayfit_version, "fit_created",
-      fit->created, "capture", "path", fit->capture_path, "name", fit->capture_name, "radiometry",
-      fit->radiometry);
+      r->relative_rmse, "residuals", (json_int_t)r->residuals, "scale", "value", r->scale, "sd",
+      r->scale_sd, "fitted", r->scale_fitted, "response", "value", r->response, "sd",
+      r->response_sd, "fitted", r->response_fitted, "loss", "type", fit->loss, "scale_sigma",
+      fit->loss_scale, "provenance", "clayfit_version", CLAYFIT_EXPORT_VERSION, "exported",
+      exported, "fit_file", json_text(fit_path), "fit_clayfit_version", fit->clayfit_version,
+      "fit_created", fit->created, "capture", "path", json_text(fit->capture_path), "name",
+      fit->capture_name, "radiometry", fit->radiometry);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the preset", path);
   cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);

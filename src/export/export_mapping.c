@@ -39,6 +39,17 @@ void export_printf(export_text *t, const char *format, ...) {
   }
 }
 
+void export_escaped(export_text *t, text_escape_fn escape, const char *text) {
+  if (t->failed) return;
+  char *escaped = text_escape_alloc(escape, text);
+  if (!escaped) {
+    t->failed = 1;
+    return;
+  }
+  export_printf(t, "%s", escaped);
+  free(escaped);
+}
+
 void export_text_free(export_text *t) {
   free(t->data);
   t->data = NULL;
@@ -158,14 +169,22 @@ void export_material_from_fit(const cf_fit_file *fit, export_material *m) {
 }
 
 void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                       const char *prefix) {
+                       const char *prefix, text_escape_fn escape) {
   const cf_model_info *m = cf_model_info_get(fit->result.model);
-  export_printf(t, "%sclayfit %s material preset: model %s (%s), fitted by clayfit %s on %s\n",
-                prefix, CLAYFIT_EXPORT_VERSION, m->code, m->name, fit->clayfit_version,
-                fit->created);
-  export_printf(t, "%sfit: %s; capture: %s (%s radiometry, %s); relative RMSE %.4g\n", prefix,
-                fit_path ? fit_path : "(not given)", fit->capture_name, fit->radiometry,
-                fit->capture_path, fit->result.relative_rmse);
+  export_printf(t, "%sclayfit %s material preset: model %s (%s), fitted by clayfit ", prefix,
+                CLAYFIT_EXPORT_VERSION, m->code, m->name);
+  export_escaped(t, escape, fit->clayfit_version);
+  export_printf(t, " on ");
+  export_escaped(t, escape, fit->created);
+  export_printf(t, "\n%sfit: ", prefix);
+  export_escaped(t, escape, fit_path ? fit_path : "(not given)");
+  export_printf(t, "; capture: ");
+  export_escaped(t, escape, fit->capture_name);
+  export_printf(t, " (");
+  export_escaped(t, escape, fit->radiometry);
+  export_printf(t, " radiometry, ");
+  export_escaped(t, escape, fit->capture_path);
+  export_printf(t, "); relative RMSE %.4g\n", fit->result.relative_rmse);
   export_printf(t, "%smodel: docs/model.md of clayfit %s; mapping: docs/presets.md\n", prefix,
                 CLAYFIT_EXPORT_VERSION);
 }

@@ -136,7 +136,7 @@ cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const cha
     type = principled_body(&m, n, &body);
   export_text t = {0};
   export_printf(&t, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<!--\n");
-  export_provenance(&t, fit, fit_path, "  ");
+  export_provenance(&t, fit, fit_path, "  ", text_escape_xml_comment);
   export_printf(&t, "  Mitsuba 3 scene fragment: include it or copy the <bsdf> into a scene.\n");
   export_notes_write(&t, n, "  ");
   export_printf(&t, "-->\n<scene version=\"3.0.0\">\n  <bsdf type=\"%s\" id=\"clayfit_%s\">\n",

@@ -218,7 +218,7 @@ cf_status export_mtlx(const cf_fit_file *fit, const char *fit_path, const char *
   }
   export_text t = {0};
   export_printf(&t, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!--\n");
-  export_provenance(&t, fit, fit_path, "  ");
+  export_provenance(&t, fit, fit_path, "  ", text_escape_xml_comment);
   export_printf(&t,
                 "  MaterialX %s as defined in libraries/bxdf/%s.mtlx of the MaterialX "
                 "distribution.\n",

@@ -140,7 +140,7 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
   return s;
 }
 
-static cf_status check_options(const cf_fit_options *o, cf_error *err) {
+cf_status cf_fit_check_options(const cf_fit_options *o, cf_error *err) {
   const cf_model_info *m = cf_model_info_get(o->model);
   if (!m) return cf_error_set(err, CF_EINVAL, "invalid model id %d", (int)o->model);
   for (int k = 0; k < m->dim; ++k) {
@@ -407,6 +407,30 @@ static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
   return s;
 }
 
+/* Photo values that cannot be radiance, left out when the capture was
+ * loaded: a warning in the fit's own list when they are more than a trace
+ * in some image (the capture's warnings say where). */
+static void warn_not_radiance(const cf_capture *capture, cf_fit_result *r) {
+  size_t total = 0, images = 0, worst = 0;
+  double worst_share = 0.0;
+  for (size_t k = 0; k < cf_capture_image_count(capture); ++k) {
+    const cf_capture_image *image = cf_capture_image_at(capture, k);
+    double share = (double)image->not_radiance /
+                   fmax(1.0, (double)(image->observations + image->not_radiance));
+    total += image->not_radiance;
+    if (share <= CF_NOT_RADIANCE_TRACE) continue;
+    ++images;
+    if (share > worst_share) worst_share = share, worst = k;
+  }
+  if (images > 0)
+    fit_add_warning(r,
+                    "%zu pixels on the sphere hold values that cannot be radiance and were left "
+                    "out, more than a trace in %zu of the %zu images (most: %.32s, %.2g %%); "
+                    "see residuals.per_image[].not_radiance",
+                    total, images, cf_capture_image_count(capture),
+                    cf_capture_image_at(capture, worst)->name, 100.0 * worst_share);
+}
+
 /* 5. The result: the values, their covariance, the solver's summary and
  * the warnings it calls for. */
 static cf_status report_result(fit_run *run, cf_error *err) {
@@ -439,6 +463,7 @@ static cf_status report_result(fit_run *run, cf_error *err) {
                     "on the multi-start's subsample two starts far apart ended within "
                     "the noise of each other (see starts); the fit on all observations "
                     "went on from the best: see its sd and correlations");
+  warn_not_radiance(run->capture, r);
   cf_capture_summary summary_of_capture;
   cf_capture_summarize(run->capture, &summary_of_capture);
   if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
@@ -463,7 +488,7 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
                              const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
   memset(r, 0, sizeof *r);
   r->model = o->model;
-  cf_status s = check_options(o, err);
+  cf_status s = cf_fit_check_options(o, err);
   if (s != CF_OK) return s;
   fit_run run = {.capture = capture, .population = population, .o = o, .r = r, .sigma = 1.0};
   fit_plan_for(capture, o, &run.plan);

@@ -213,9 +213,10 @@ static json_t *per_image_json(const cf_fit_report *rep) {
   for (size_t k = 0; k < r->images; ++k)
     json_array_append_new(
         per_image,
-        json_pack("{s:s, s:f, s:f, s:f}", "name", cf_capture_image_at(rep->capture, k)->name,
+        json_pack("{s:s, s:f, s:f, s:f, s:I}", "name", cf_capture_image_at(rep->capture, k)->name,
                   "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
-                  r->exposures[k]));
+                  r->exposures[k], "not_radiance",
+                  (json_int_t)cf_capture_image_at(rep->capture, k)->not_radiance));
   return per_image;
 }
 

@@ -13,7 +13,6 @@
 #include "core/file.h"
 #include "core/json_reader.h"
 
-#define FIT_FILE_MAX_SIZE ((size_t)256 << 20)
 #define HUGE_NUMBER 1e308
 
 /* Shorthands: every call names the object, its location and the key. */
@@ -250,9 +249,8 @@ static cf_status read_capture(const json_t *root, const json_at *at, const char 
   json_at p = json_member_at(&here, "path");
   TRY(locate_capture(path, fit_path, &p, f, err));
   TRY(get_text(obj, &here, "name", f->capture_name, sizeof f->capture_name, err));
-  size_t count;
-  TRY(get_count(obj, &here, "images", &count, err));
-  TRY(get_count(obj, &here, "observations", &count, err));
+  TRY(get_count(obj, &here, "images", &f->capture_images, err));
+  TRY(get_count(obj, &here, "observations", &f->capture_observations, err));
   static const char *const radiometry[] = {"absolute", "relative", "from_reference", NULL};
   int r;
   TRY(json_get_choice(obj, &here, "radiometry", 1, radiometry, &r, NULL, err));
@@ -461,7 +459,8 @@ static cf_status read_residuals(const json_t *root, const json_at *at, cf_fit_re
     const json_t *item = json_array_get(per_image, k);
     if (!json_is_object(item))
       return json_fail(&e, err, CF_EPARSE, "expected an object, got %s", json_type_name(item));
-    static const char *const ikeys[] = {"name", "rmse", "relative_rmse", "exposure", NULL};
+    static const char *const ikeys[] = {"name",     "rmse",         "relative_rmse",
+                                        "exposure", "not_radiance", NULL};
     TRY(json_check_keys(item, &e, ikeys, err));
     const char *name;
     TRY(json_get_string(item, &e, "name", 1, &name, NULL, err));
@@ -824,10 +823,10 @@ cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err) {
   for (int c = 0; c < 3; ++c) file->absorption[c] = NAN;
   for (int k = 0; k < CF_MAX_DIM; ++k) file->result.sd[k] = NAN;
   json_t *root = NULL;
-  cf_status s = json_load_object(path, FIT_FILE_MAX_SIZE, &root, err);
+  cf_status s = json_load_object(path, CF_FIT_FILE_MAX_SIZE, &root, err);
   if (s != CF_OK) return s;
+  file->document = root;
   s = read_root(root, path, file, err);
-  json_decref(root);
   if (s != CF_OK) cf_fit_file_free(file);
   return s;
 }
@@ -845,5 +844,8 @@ cf_status cf_fit_file_check_capture(const cf_fit_file *file, const char *fit_pat
 }
 
 void cf_fit_file_free(cf_fit_file *file) {
-  if (file) cf_fit_result_free(&file->result);
+  if (!file) return;
+  cf_fit_result_free(&file->result);
+  if (file->document) json_decref(file->document);
+  file->document = NULL;
 }

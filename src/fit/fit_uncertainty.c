@@ -100,12 +100,31 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
   return s;
 }
 
-/* Mark the model slots the capture does not constrain: those that carry
- * the eigenvectors of the (width-scaled) normal matrix whose eigenvalues
- * are negligible, or whose standard deviation exceeds half their range. */
+/* Mark the model slots that no observation moves: a column of the
+ * Jacobian that is exactly 0 (the ones merely small are the eigenvalues'
+ * and the hidden base's to judge). A slot at a bound too: the solver's
+ * active set can hold one there that the data never touched (an albedo
+ * started at its floor in a channel no light has), and it is not
+ * "fitted". */
+static int mark_unmoved(const fit_problem *p, const double *jtj, fit_plan *plan) {
+  int found = 0;
+  for (int u = 0; u < p->num_unknowns; ++u)
+    if (fit_unknown_is_model(p->unknowns[u].kind) &&
+        !(jtj[(size_t)u * (size_t)p->num_unknowns + (size_t)u] > 0.0)) {
+      plan->status[p->unknowns[u].slot] = CF_PARAM_UNCONSTRAINED;
+      found = 1;
+    }
+  return found;
+}
+
+/* Mark the model slots the capture does not constrain: those no
+ * observation moves, those that carry the eigenvectors of the
+ * (width-scaled) normal matrix whose eigenvalues are negligible, or whose
+ * standard deviation exceeds half their range. */
 cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
                                  int rank_deficient, fit_plan *plan, int *found, cf_error *err) {
-  *found = 0;
+  *found = mark_unmoved(p, jtj, plan);
+  if (*found) return CF_OK;
   if (covariance && !rank_deficient) {
     for (int u = 0; u < p->num_unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];

@@ -1,6 +1,7 @@
 /* The residual of every observation in units of σ, its marks and its
  * angles (report_internal.h). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,19 +25,17 @@ static double half_angle(const cf_observations *o, size_t i) {
  * residuals) must agree. */
 static cf_status check_same_capture(const report_data *d, const char *fit_path, cf_error *err) {
   const cf_fit_file *fit = d->fit;
-  const json_t *capture = d->doc ? json_object_get(d->doc, "capture") : NULL;
-  const json_t *observations = json_object_get(capture, "observations");
   const json_t *per_image =
       d->doc ? json_object_get(json_object_get(d->doc, "residuals"), "per_image") : NULL;
   if (fit->result.images != d->images)
     return cf_error_set(err, CF_EINVAL,
                         "%s: the fit has %zu images and the capture %zu: not this capture's fit",
                         fit_path, fit->result.images, d->images);
-  if (json_is_integer(observations) && (size_t)json_integer_value(observations) != d->count)
+  if (fit->capture_observations != d->count)
     return cf_error_set(err, CF_EINVAL,
-                        "%s: the fit was made on %lld observations and the capture has %zu: not "
+                        "%s: the fit was made on %zu observations and the capture has %zu: not "
                         "this capture's fit",
-                        fit_path, (long long)json_integer_value(observations), d->count);
+                        fit_path, fit->capture_observations, d->count);
   for (size_t k = 0; json_is_array(per_image) && k < json_array_size(per_image) && k < d->images;
        ++k) {
     const json_t *name = json_object_get(json_array_get(per_image, k), "name");
@@ -63,7 +62,6 @@ void report_data_free(report_data *d) {
   free(d->first);
   free(d->last);
   free(d->rms_sigma);
-  if (d->doc) json_decref(d->doc);
   memset(d, 0, sizeof *d);
 }
 
@@ -140,8 +138,7 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
   d->count = d->obs->count;
   d->images = cf_capture_image_count(capture);
   d->loss_scale = strcmp(fit->loss, "none") == 0 ? INFINITY : fit->loss_scale;
-  json_error_t parse;
-  d->doc = json_load_file(fit_path, JSON_REJECT_DUPLICATES, &parse);
+  d->doc = fit->document; /* parsed once, under cf_fit_file_read's cap */
   cf_status s = check_same_capture(d, fit_path, err);
   if (s != CF_OK) {
     report_data_free(d);
@@ -164,4 +161,139 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
   s = residuals(d, err);
   if (s != CF_OK) report_data_free(d);
   return s;
+}
+
+/* ---- is another capture the fit's? ---- */
+
+static int differ(double a, double b, double absolute) {
+  double scale = absolute > 0.0 ? absolute : 1e-6 * fmax(fabs(a), fabs(b));
+  return !(fabs(a - b) <= scale); /* NaN differs */
+}
+
+static int differ_n(const double *a, const double *b, size_t n, double absolute) {
+  for (size_t k = 0; k < n; ++k)
+    if (differ(a[k], b[k], absolute)) return 1;
+  return 0;
+}
+
+/* The images, the noise model and the radiometry (what cf_capture_image
+ * and the summary hold). */
+static cf_status compare_images(const cf_capture *a, const cf_capture *b, char *what, size_t size) {
+  size_t n = cf_capture_image_count(a);
+  if (n != cf_capture_image_count(b)) {
+    snprintf(what, size, "the fit has %zu images and the capture %zu", cf_capture_image_count(b),
+             n);
+    return CF_EINVAL;
+  }
+  for (size_t k = 0; k < n; ++k) {
+    const cf_capture_image *x = cf_capture_image_at(a, k), *y = cf_capture_image_at(b, k);
+    if (strcmp(x->name, y->name) != 0)
+      snprintf(what, size, "image %zu is %s, in the fit's capture %s", k, x->name, y->name);
+    else if (x->lights != y->lights)
+      snprintf(what, size, "the lights differ: image %zu (%s) has %d lights, in the fit's capture %d",
+               k, x->name, x->lights, y->lights);
+    else if (differ(x->exposure, y->exposure, 0.0))
+      snprintf(what, size,
+               "the colours differ (the colour block's exposure): image %zu (%s) has exposure %.9g, "
+               "in the fit's capture %.9g",
+               k, x->name, x->exposure, y->exposure);
+    else
+      continue;
+    return CF_EINVAL;
+  }
+  cf_capture_summary p, q;
+  cf_capture_summarize(a, &p);
+  cf_capture_summarize(b, &q);
+  if (p.radiometry_relative != q.radiometry_relative ||
+      p.radiometry_from_reference != q.radiometry_from_reference ||
+      differ(p.reference_scale, q.reference_scale, 0.0))
+    snprintf(what, size, "the radiometry differs (%s, in the fit's capture %s)",
+             p.radiometry_relative ? "relative" : "absolute",
+             q.radiometry_relative ? "relative" : "absolute");
+  else if (p.tone_curve_unknown != q.tone_curve_unknown)
+    snprintf(what, size, "the colours differ: the colour block's tone curve is %s, in the fit's "
+             "capture %s", p.tone_curve_unknown ? "unknown" : "known",
+             q.tone_curve_unknown ? "unknown" : "known");
+  else if (p.has_noise != q.has_noise || differ(p.noise_read, q.noise_read, 0.0) ||
+           differ(p.noise_shot, q.noise_shot, 0.0))
+    snprintf(what, size, "the noise model differs");
+  else
+    return CF_OK;
+  return CF_EINVAL;
+}
+
+/* Observation i of both (the same image, pixel and surface): its lights,
+ * then its colours. */
+static cf_status compare_observation(const cf_capture *a, const cf_capture *b, size_t i,
+                                     char *what, size_t size) {
+  const cf_observations *x = cf_capture_observations(a), *y = cf_capture_observations(b);
+  const char *name = x->image[i] < cf_capture_image_count(a)
+                         ? cf_capture_image_at(a, x->image[i])->name
+                         : "?";
+  char where[400];
+  snprintf(where, sizeof where, "image %u (%s), pixel (%.1f, %.1f)", (unsigned)x->image[i], name,
+           (double)x->pixel[2 * i], (double)x->pixel[2 * i + 1]);
+  if (x->image[i] != y->image[i] || x->pixel[2 * i] != y->pixel[2 * i] ||
+      x->pixel[2 * i + 1] != y->pixel[2 * i + 1]) {
+    snprintf(what, size, "the observations differ: %s is at another place in the fit's capture",
+             where);
+    return CF_EINVAL;
+  }
+  if (differ_n(x->normal + 3 * i, y->normal + 3 * i, 3, 1e-6) ||
+      differ_n(x->view + 3 * i, y->view + 3 * i, 3, 1e-6)) {
+    snprintf(what, size, "the sphere or the cameras differ: %s has another normal or view", where);
+    return CF_EINVAL;
+  }
+  for (int j = 0; j < x->lights; ++j) {
+    size_t at = 3 * ((size_t)x->lights * i + (size_t)j);
+    const double *p = x->light_dir + at, *q = y->light_dir + at;
+    const double *e = x->irradiance + at, *f = y->irradiance + at;
+    if (differ_n(p, q, 3, 1e-6)) {
+      snprintf(what, size,
+               "the lights differ (a direction or position): %s, light %d comes from (%.6f, "
+               "%.6f, %.6f), in the fit's capture from (%.6f, %.6f, %.6f)",
+               where, j, p[0], p[1], p[2], q[0], q[1], q[2]);
+      return CF_EINVAL;
+    }
+    if (differ_n(e, f, 3, 0.0)) {
+      snprintf(what, size,
+               "the lights differ (an intensity or distance): %s, light %d gives irradiance "
+               "(%.6g, %.6g, %.6g), in the fit's capture (%.6g, %.6g, %.6g)",
+               where, j, e[0], e[1], e[2], f[0], f[1], f[2]);
+      return CF_EINVAL;
+    }
+  }
+  const double *u = x->rgb + 3 * i, *v = y->rgb + 3 * i;
+  if (differ_n(u, v, 3, 0.0) || x->flags[i] != y->flags[i]) {
+    snprintf(what, size,
+             "the colours differ (the colour block: encoding, black and clip levels, exposure; "
+             "or the photos): %s is (%.6g, %.6g, %.6g)%s, in the fit's capture (%.6g, %.6g, "
+             "%.6g)%s",
+             where, u[0], u[1], u[2], x->flags[i] & CF_OBS_CLIPPED ? " clipped" : "", v[0], v[1],
+             v[2], y->flags[i] & CF_OBS_CLIPPED ? " clipped" : "");
+    return CF_EINVAL;
+  }
+  return CF_OK;
+}
+
+cf_status cf_report_compare_captures(const cf_capture *capture, const char *capture_path,
+                                     const cf_capture *fit_capture, const char *fit_capture_path,
+                                     cf_error *err) {
+  char what[700];
+  cf_status s = compare_images(capture, fit_capture, what, sizeof what);
+  const cf_observations *x = cf_capture_observations(capture);
+  const cf_observations *y = cf_capture_observations(fit_capture);
+  if (s == CF_OK && (x->count != y->count || x->lights != y->lights)) {
+    snprintf(what, sizeof what,
+             "it has %zu observations with %d light slots, the fit's capture %zu with %d",
+             x->count, x->lights, y->count, y->lights);
+    s = CF_EINVAL;
+  }
+  for (size_t i = 0; s == CF_OK && i < x->count; ++i)
+    s = compare_observation(capture, fit_capture, i, what, sizeof what);
+  if (s == CF_OK) return CF_OK;
+  return cf_error_set(err, CF_EINVAL,
+                      "%s is not the capture the fit was made on (%s): %s; report on the fit's "
+                      "own capture, or fit this one",
+                      capture_path, fit_capture_path, what);
 }

@@ -4,8 +4,16 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/text_escape.h"
 #include "report_internal.h"
 #include "svg.h"
+
+/* Untrusted text (the capture's name, paths, image names, anything read
+ * from fit.json) on the page, escaped; a failed write shows in ferror(f),
+ * checked when the page is closed. */
+static void html(FILE *f, const char *text) {
+  text_escape_fputs(f, text_escape_html, text);
+}
 
 static double number_at(const json_t *object, const char *key) {
   const json_t *v = json_object_get(object, key);
@@ -22,7 +30,7 @@ static void head(FILE *f, const report_data *d, const char *fit_path, const char
   fputs(
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>clayfit report: ",
       f);
-  svg_escape(f, d->fit->capture_name);
+  html(f, d->fit->capture_name);
   fputs(
       "</title>\n<style>\nbody{font-family:sans-serif;margin:24px;max-width:1400px}\n"
       "table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:3px 8px;"
@@ -32,18 +40,20 @@ static void head(FILE *f, const report_data *d, const char *fit_path, const char
       "tr.chosen td{font-weight:bold}.warn{color:#a04000}\n</style></head><body>\n",
       f);
   fputs("<h1>clayfit report</h1>\n<p>Fit <code>", f);
-  svg_escape(f, fit_path);
+  html(f, fit_path);
   fputs("</code> of the capture <code>", f);
-  svg_escape(f, d->fit->capture_path);
-  fprintf(f, "</code> (%s; %zu images, %zu observations): model <b>%s (%s)</b>, radiometry ",
-          d->fit->capture_name, d->images, d->count, m->code, m->name);
-  svg_escape(f, d->fit->radiometry);
+  html(f, d->capture_path); /* the capture re-rendered (--capture, else the fit's) */
+  fputs("</code> (", f);
+  html(f, d->fit->capture_name);
+  fprintf(f, "; %zu images, %zu observations): model <b>%s (%s)</b>, radiometry ", d->images,
+          d->count, m->code, m->name);
+  html(f, d->fit->radiometry);
   fputs(". Fitted by clayfit ", f);
-  svg_escape(f, d->fit->clayfit_version);
+  html(f, d->fit->clayfit_version);
   fputs(" on ", f);
-  svg_escape(f, d->fit->created);
+  html(f, d->fit->created);
   fputs("; report by clayfit ", f);
-  svg_escape(f, version);
+  html(f, version);
   fputs(".</p>\n", f);
 }
 
@@ -93,7 +103,7 @@ static void parameter_table(FILE *f, const report_data *d) {
   const json_t *warnings = d->doc ? json_object_get(d->doc, "warnings") : NULL;
   for (size_t i = 0; json_is_array(warnings) && i < json_array_size(warnings); ++i) {
     fputs("<p class=\"warn\">Warning: ", f);
-    svg_escape(f, json_string_value(json_array_get(warnings, i)));
+    html(f, json_string_value(json_array_get(warnings, i)));
     fputs("</p>\n", f);
   }
 }
@@ -124,7 +134,7 @@ static void choice_table(FILE *f, const report_data *d) {
     return;
   }
   fputs("<p>Held out: ", f);
-  svg_escape(f, string_at(choice, "heldout"));
+  html(f, string_at(choice, "heldout"));
   fputs(
       ".</p>\n<table><tr><th class=\"l\">model</th><th>unknowns</th><th>BIC</th>"
       "<th>held-out RMS (&sigma;)</th><th>held-out relative RMSE</th><th>training relative "
@@ -135,7 +145,7 @@ static void choice_table(FILE *f, const report_data *d) {
     const json_t *c = json_array_get(list, i);
     fprintf(f, "<tr%s><td class=\"l\">",
             json_is_true(json_object_get(c, "chosen")) ? " class=\"chosen\"" : "");
-    svg_escape(f, string_at(c, "model"));
+    html(f, string_at(c, "model"));
     fprintf(f,
             "</td><td>%.0f</td><td>%.6g</td><td>%.4g</td><td>%.4g %%</td><td>%.4g %%</td>"
             "<td>%.3g</td><td class=\"l\">",
@@ -146,7 +156,8 @@ static void choice_table(FILE *f, const report_data *d) {
     const json_t *p;
     json_object_foreach((json_t *)json_object_get(c, "params"), key, p) {
       const json_t *v = json_object_get(p, "value");
-      fprintf(f, "%s ", key);
+      html(f, key);
+      fputs(" ", f);
       if (json_is_array(v))
         for (size_t j = 0; j < json_array_size(v); ++j)
           fprintf(f, "%s%.4g", j ? "," : "", json_number_value(json_array_get(v, j)));
@@ -155,7 +166,7 @@ static void choice_table(FILE *f, const report_data *d) {
       fputs("; ", f);
     }
     fputs("</td><td class=\"l\">", f);
-    svg_escape(f, json_is_true(json_object_get(c, "chosen")) ? "chosen" : string_at(c, "note"));
+    html(f, json_is_true(json_object_get(c, "chosen")) ? "chosen" : string_at(c, "note"));
     fputs("</td></tr>\n", f);
   }
   fputs("</table>\n", f);
@@ -175,13 +186,13 @@ static void plots_and_speed(FILE *f, const report_data *d) {
           number_at(timing, "load_s"), number_at(timing, "fit_s"), number_at(timing, "choice_s"),
           number_at(timing, "total_s"), number_at(solver, "iterations"),
           number_at(solver, "solves"), number_at(solver, "seconds"));
-  svg_escape(f, string_at(solver, "termination"));
+  html(f, string_at(solver, "termination"));
   fprintf(f, ". Observations: %zu", d->count);
   const json_t *sample = d->doc ? json_object_get(d->doc, "sample") : NULL;
   if (json_is_object(sample)) {
     fprintf(f, "; the fit used a pixel budget of %.0f of them (",
             number_at(sample, "observations"));
-    svg_escape(f, string_at(sample, "sampling"));
+    html(f, string_at(sample, "sampling"));
     fputs(
         "), each weighed by the inverse of its chance: its standard deviations are the "
         "sample's; the residuals on this page are every observation's",
@@ -237,18 +248,20 @@ static void image_rows(FILE *f, const report_data *d, char (*files)[3][64]) {
   const cf_fit_result *r = &d->fit->result;
   for (size_t k = 0; k < d->images; ++k) {
     const cf_capture_image *im = cf_capture_image_at(d->capture, k);
-    for (int p = 0; p < 3; ++p)
-      fprintf(f, "<img src=\"%s\" alt=\"%s %s\">", files[k][p], im->name,
-              p == 0   ? "photo"
-              : p == 1 ? "render"
-                       : "residual");
+    for (int p = 0; p < 3; ++p) {
+      fputs("<img src=\"", f);
+      html(f, files[k][p]);
+      fputs("\" alt=\"", f);
+      html(f, im->name);
+      fprintf(f, " %s\">", p == 0 ? "photo" : p == 1 ? "render" : "residual");
+    }
     fputs("<div>", f);
-    svg_escape(f, im->name);
+    html(f, im->name);
     fprintf(f,
             "<br>%zu observations, relative RMSE %.3g %%, RMS %.3g &sigma;<br>%zu censored, "
-            "%zu beyond the loss</div>\n",
+            "%zu beyond the loss, %zu left out (not radiance)</div>\n",
             d->observations[k], r->image_relative_rmse ? 100.0 * r->image_relative_rmse[k] : NAN,
-            d->rms_sigma[k], d->censored[k], d->rejected[k]);
+            d->rms_sigma[k], d->censored[k], d->rejected[k], im->not_radiance);
   }
   fputs("</div>\n", f);
 }

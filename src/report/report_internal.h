@@ -32,7 +32,10 @@ typedef struct report_data {
   size_t *first, *last; /* the range of observations holding image k's
                            (the capture lists them image by image) */
   double *rms_sigma;    /* RMS of residual, σ units */
-  json_t *doc;          /* fit.json as read (for the choice, solver, timings); may be NULL */
+  const char *capture_path;  /* the capture re-rendered */
+  const char *capture_check; /* how it was checked to be the fit's (cf_report_options) */
+  const json_t *doc;    /* fit.json as cf_fit_file_read parsed it (the fit's; for the
+                           choice, solver, timings); may be NULL */
 } report_data;
 
 cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_fit_file *fit,

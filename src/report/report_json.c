@@ -1,10 +1,11 @@
 /* report.json (data_schema/report.schema.json). */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 #include <time.h>
 
-#include "report_internal.h"
 #include "core/json_reader.h"
+#include "report_internal.h"
 
 static json_t *number_or_null(double x) {
   return isfinite(x) ? json_real(x) : json_null();
@@ -50,12 +51,12 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
     const cf_capture_image *im = cf_capture_image_at(d->capture, k);
     json_array_append_new(
         images,
-        json_pack("{s:s, s:s, s:s, s:s, s:I, s:I, s:I, s:f, s:o, s:o}", "name", im->name, "photo",
-                  image_files[k][0], "render", image_files[k][1], "residual", image_files[k][2],
-                  "observations", (json_int_t)d->observations[k], "censored",
-                  (json_int_t)d->censored[k], "rejected", (json_int_t)d->rejected[k], "rms_sigma",
-                  d->rms_sigma[k], "rmse", number_or_null(r->image_rmse ? r->image_rmse[k] : NAN),
-                  "relative_rmse",
+        json_pack("{s:o, s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:f, s:o, s:o}", "name",
+                  json_text(im->name), "photo", image_files[k][0], "render", image_files[k][1],
+                  "residual", image_files[k][2], "observations", (json_int_t)d->observations[k],
+                  "censored", (json_int_t)d->censored[k], "rejected", (json_int_t)d->rejected[k],
+                  "not_radiance", (json_int_t)im->not_radiance, "rms_sigma", d->rms_sigma[k],
+                  "rmse", number_or_null(r->image_rmse ? r->image_rmse[k] : NAN), "relative_rmse",
                   number_or_null(r->image_relative_rmse ? r->image_relative_rmse[k] : NAN)));
   }
   for (int p = 0; p < REPORT_PLOT_COUNT; ++p)
@@ -67,16 +68,21 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
   strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &utc);
   json_t *params = parameters_json(r, &unconstrained);
   json_t *doc = json_pack(
-      "{s:i, s:s, s:s, s:s, s:s, s:{s:s, s:s}, s:{s:s, s:s}, s:o, s:o, s:f, "
+      "{s:i, s:s, s:s, s:o, s:s, s:{s:o, s:s}, s:{s:s, s:s}, s:o, s:o, s:f, "
       "s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:o, s:o}",
-      "clayfit_report", 1, "clayfit_version", version, "created", created, "fit", fit_path, "page",
-      "index.html", "capture", "path", d->fit->capture_path, "name", d->fit->capture_name, "model",
-      "code", m->code, "name", m->name, "parameters", params, "not_constrained", unconstrained,
-      "sigma_range", CF_REPORT_SIGMA_RANGE, "residuals", "count", (json_int_t)used, "censored",
-      (json_int_t)censored, "rejected", (json_int_t)rejected, "beyond_sigma_range",
-      (json_int_t)beyond, "rms_sigma", used ? sqrt(sum2 / (double)used) : 0.0, "loss_scale_sigma",
-      isfinite(d->loss_scale) ? d->loss_scale : 0.0, "images", images, "plots", plots);
+      "clayfit_report", 1, "clayfit_version", version, "created", created, "fit",
+      json_text(fit_path), "page", "index.html", "capture", "path", json_text(d->capture_path),
+      "name", d->fit->capture_name, "model", "code", m->code, "name", m->name, "parameters", params,
+      "not_constrained", unconstrained, "sigma_range", CF_REPORT_SIGMA_RANGE, "residuals", "count",
+      (json_int_t)used, "censored", (json_int_t)censored, "rejected", (json_int_t)rejected,
+      "beyond_sigma_range", (json_int_t)beyond, "rms_sigma", used ? sqrt(sum2 / (double)used) : 0.0,
+      "loss_scale_sigma", isfinite(d->loss_scale) ? d->loss_scale : 0.0, "images", images, "plots",
+      plots);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build report.json");
+  json_t *capture = json_object_get(doc, "capture");
+  if (strcmp(d->capture_path, d->fit->capture_path) != 0)
+    json_object_set_new(capture, "fit_capture", json_text(d->fit->capture_path));
+  if (d->capture_check[0]) json_object_set_new(capture, "check", json_string(d->capture_check));
   char path[4096];
   snprintf(path, sizeof path, "%s/report.json", dir);
   cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(10), err);

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/text_escape.h"
+
 double svg_px(const svg_plot *p, double x) {
   return p->left + (x - p->x0) / (p->x1 - p->x0) * p->width;
 }
@@ -15,18 +17,7 @@ double svg_py(const svg_plot *p, double y) {
 }
 
 void svg_escape(FILE *f, const char *text) {
-  for (; text && *text; ++text) {
-    if (*text == '&')
-      fputs("&amp;", f);
-    else if (*text == '<')
-      fputs("&lt;", f);
-    else if (*text == '>')
-      fputs("&gt;", f);
-    else if (*text == '"')
-      fputs("&quot;", f);
-    else
-      fputc(*text, f);
-  }
+  text_escape_fputs(f, text_escape_xml, text);
 }
 
 cf_status svg_begin(svg_plot *p, const char *path, int width, int height, const char *title,

@@ -32,8 +32,8 @@ void svg_legend(svg_plot *plot, int row, const char *colour, const char *text);
 /* Text at picture coordinates. */
 void svg_text(svg_plot *plot, double px, double py, const char *anchor, const char *text);
 
-/* Text with markup's special characters (&, <, >, ") escaped, for SVG and
- * the page alike; NULL writes nothing. */
+/* Text escaped for SVG (XML) text and attribute values: the core's
+ * text_escape_xml (core/text_escape.h); NULL writes nothing. */
 void svg_escape(FILE *f, const char *text);
 /* Close the file; CF_EIO naming path if writing failed. */
 cf_status svg_end(svg_plot *plot, const char *path, cf_error *err);

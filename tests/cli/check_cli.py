@@ -15,6 +15,7 @@ usage: check_cli.py [--exit N] [--stderr REGEX] [--stdout REGEX]
 --json-file  the JSON to check is this file (written by the command), not stdout
 --expect   a Python expression over `doc` (stdout's JSON), with math and os, that
            must be true
+--skip-unless PATH  exit 77 (skipped) when PATH does not exist (third-party data)
 """
 import argparse
 import json
@@ -37,8 +38,12 @@ def main() -> int:
     parser.add_argument("--schema")
     parser.add_argument("--json-file")
     parser.add_argument("--expect", action="append", default=[])
+    parser.add_argument("--skip-unless")
     parser.add_argument("command", nargs=argparse.REMAINDER)
     args = parser.parse_args()
+    if args.skip_unless and not os.path.exists(args.skip_unless):
+        print(f"skipped: {args.skip_unless} is absent")
+        return 77
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
     result = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=args.cwd)
     failures = []

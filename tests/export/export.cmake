@@ -64,3 +64,15 @@ foreach(name error_export_missing_fit error_export_wrong_type error_export_unkno
         error_export_no_format error_eval_bad_preset)
   set_tests_properties(cli_${name} PROPERTIES LABELS "cli;export" FIXTURES_REQUIRED export_fits)
 endforeach()
+
+# Hostile names (issue 16): the capture's name and path in fit.json and the
+# fit file's folder hold code after newlines, `-->`, markup, quotes, `"""`,
+# backslashes, control characters and invalid UTF-8; every format is exported
+# and checked (tests/export/check_export_hostile.py): the Blender script's AST
+# is the clean export's and runs nothing injected, the XML parses with one
+# comment that gives the name back, the JSON holds it; a NUL is refused.
+add_test(NAME cli_export_hostile_names
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/export/check_export_hostile.py
+                 ${CLAYFIT} ${EXPORT_DIR}/M4/fit.json ${CMAKE_CURRENT_BINARY_DIR}/export_hostile)
+set_tests_properties(cli_export_hostile_names PROPERTIES LABELS "cli;export"
+                     FIXTURES_REQUIRED export_fits)

@@ -28,7 +28,7 @@ add_test(NAME cli_report_other_synth COMMAND ${CLAYFIT} --quiet synth -o ${REPOR
 set_tests_properties(cli_report_other_synth PROPERTIES LABELS "cli;report"
                      FIXTURES_SETUP report_other)
 clayfit_cli_test(error_report_other_capture --exit 2
-  --stderr "the fit has 8 images and the capture 4: not this capture's fit"
+  --stderr "the fit has 8 images and the capture 4"
   -- ${CLAYFIT} --quiet report ${FIT_SMALL}/auto/fit.json -o ${FIT_SMALL}/never
      --capture ${REPORT_OTHER}/capture.json)
 set_tests_properties(cli_error_report_no_fit cli_error_report_no_output
@@ -44,3 +44,40 @@ add_test(NAME report_diligent
                  ${PROJECT_SOURCE_DIR} ${CLAYFIT_SHARED_DATA} ${CMAKE_CURRENT_BINARY_DIR}/report_diligent
                  ${SCHEMA}/report.schema.json)
 set_tests_properties(report_diligent PROPERTIES LABELS "report;slow" SKIP_RETURN_CODE 77 TIMEOUT 900)
+
+# Issue 16: the report written whole or not at all (item 5), fit.json read
+# once under its cap (item 13), --capture compared by its lights and colours
+# (item 10). A second fit of the small capture (M0), whose report differs
+# from the M2 fit's in every picture.
+set(REPORT_SAFETY ${CMAKE_CURRENT_BINARY_DIR}/report_safety)
+add_test(NAME cli_report_fit_m0
+         COMMAND ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${REPORT_SAFETY}/m0 --model M0
+                 --footprint centre)
+set_tests_properties(cli_report_fit_m0 PROPERTIES LABELS "cli;report" FIXTURES_REQUIRED fit_small
+                     FIXTURES_SETUP report_fit_m0)
+clayfit_c_test(test_report_atomic SOURCES report/test_report_atomic.c
+               LIBS clayfit_report clayfit_core LABELS report
+               ARGS ${FIT_SMALL}/capture.json ${FIT_SMALL}/auto/fit.json ${REPORT_SAFETY}/m0/fit.json
+                    ${REPORT_SAFETY}/atomic)
+set_tests_properties(test_report_atomic PROPERTIES
+                     FIXTURES_REQUIRED "fit_small;fit_small_auto;report_fit_m0")
+
+# Hostile names (issue 16): a synthetic capture whose name, folder and image
+# names (a binary COLMAP model) hold `</script><script>`, quotes, `-->`,
+# newlines and controls, fitted and reported (tests/report/check_report_hostile.py):
+# the page has only its own <script> and tags, shows every name as text, the
+# SVG plots parse; a \u0000 in the capture's or the fit's name is refused.
+add_test(NAME report_hostile_names
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_report_hostile.py
+                 ${CLAYFIT} ${CMAKE_CURRENT_BINARY_DIR}/report_hostile)
+set_tests_properties(report_hostile_names PROPERTIES LABELS "cli;report")
+foreach(case oversized capture folders)
+  add_test(NAME report_safety_${case}
+           COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/report_safety.py ${case}
+                   ${CLAYFIT} ${FIT_SMALL} ${REPORT_SAFETY}/${case} ${SCHEMA}/report.schema.json)
+  set_tests_properties(report_safety_${case} PROPERTIES LABELS "cli;report"
+                       FIXTURES_REQUIRED "fit_small;fit_small_auto;report_fit_m0")
+  if(CLAYFIT_SANITIZE) # no address-space limits: AddressSanitizer's shadow needs the space
+    set_property(TEST report_safety_${case} APPEND PROPERTY ENVIRONMENT CLAYFIT_SANITIZE=1)
+  endif()
+endforeach()

@@ -280,6 +280,13 @@ std::string JsonArray(const std::vector<double> &a) {
   return s + "]";
 }
 
+// One word for `sh -c`: single quotes, a ' inside written '\''.
+static std::string ShellQuoted(const std::string &word) {
+  std::string quoted = "'";
+  for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
 // SciPy's least_squares through scripts/peer_scipy.py: the observations,
 // the C evaluator's prediction at the start (the script checks its model
 // against it) and the problem's settings in a directory, the result as JSON
@@ -315,7 +322,8 @@ void SolveScipy(const Data &d, const std::vector<double> &start, const std::vect
     out->note = "cannot write the problem to " + dir;
     return;
   }
-  const std::string command = "'" + o.python + "' '" + o.script + "' '" + dir + "'";
+  const std::string command =
+      ShellQuoted(o.python) + " " + ShellQuoted(o.script) + " " + ShellQuoted(dir);
   double t0 = peers_now();
   FILE *pipe = popen(command.c_str(), "r");
   std::string text;

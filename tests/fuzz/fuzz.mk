@@ -1,0 +1,63 @@
+# The libFuzzer targets and their seed writers: the one place for their
+# sources and flags. scripts/fuzz.sh runs it (from the project's root):
+#   make -f tests/fuzz/fuzz.mk -j N OUT=build/fuzz CC=clang CXX=clang++
+# clayfit's sources are compiled here with libFuzzer's coverage, ASan and
+# UBSan (their own CMake builds do not change), into OUT/obj, rebuilt when
+# a source or a header it includes changes. Jansson, OpenImageIO and the
+# image libraries under it are Debian's, linked uninstrumented.
+OUT ?= build/fuzz
+OBJ := $(OUT)/obj
+
+SANITIZE := -fsanitize=address,undefined -fno-sanitize-recover=undefined
+COMMON := -g -O1 -fno-omit-frame-pointer -Wall -Wextra -Werror -Iinclude -Isrc -MMD -MP
+CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L $(COMMON)
+CXXFLAGS := -std=c++17 $(COMMON)
+INSTRUMENT := -fsanitize=fuzzer-no-link $(SANITIZE)
+LIBS := -Wl,--as-needed -lOpenImageIO -lOpenImageIO_Util -ljansson -lm
+
+CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c
+MODEL := $(wildcard src/model/*.c)
+COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/colmap_binary.c \
+          src/capture/colmap_text.c src/capture/colmap_read.c
+COLMAP_WRITE := src/capture/colmap_write.c
+IMAGE := src/capture/image_io.cpp src/capture/image_exr_check.c src/capture/image_check.c \
+         src/capture/colour.c src/capture/envmap.c
+CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
+FIT_READ := src/fit/fit_read.c src/fit/fit_result.c
+
+# target: its harness, then the sources it reads with
+fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
+fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c src/capture/capture_spec.c $(CORE)
+fuzz_text := tests/fuzz/fuzz_text.c tests/fuzz/fuzz_stubs.c $(CAPTURE_FILES) $(IMAGE) $(CORE)
+fuzz_fit_file := tests/fuzz/fuzz_fit_file.c $(FIT_READ) $(MODEL) $(CORE)
+fuzz_image := tests/fuzz/fuzz_image.cpp $(IMAGE) $(CORE)
+TARGETS := fuzz_colmap_binary fuzz_capture_spec fuzz_text fuzz_fit_file fuzz_image
+
+# seed writers (clayfit's own writers, no libFuzzer main)
+make_seeds := tests/fuzz/make_seeds.c $(COLMAP) $(COLMAP_WRITE) $(CORE)
+make_image_seeds := tests/fuzz/make_image_seeds.c $(IMAGE) $(CORE)
+WRITERS := make_seeds make_image_seeds
+
+objects = $(patsubst %,$(OBJ)/%.o,$(basename $(1)))
+
+all: $(addprefix $(OUT)/,$(TARGETS) $(WRITERS))
+
+define link_target
+$(OUT)/$(1): $(call objects,$($(1)))
+	$$(CXX) $(2) $$^ $(LIBS) -o $$@
+endef
+$(foreach t,$(TARGETS),$(eval $(call link_target,$(t),-fsanitize=fuzzer $(SANITIZE))))
+$(foreach t,$(WRITERS),$(eval $(call link_target,$(t),-fsanitize=fuzzer-no-link $(SANITIZE))))
+
+$(OBJ)/%.o: %.c tests/fuzz/fuzz.mk
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(INSTRUMENT) -c $< -o $@
+
+$(OBJ)/%.o: %.cpp tests/fuzz/fuzz.mk
+	@mkdir -p $(@D)
+	$(CXX) $(CXXFLAGS) $(INSTRUMENT) -c $< -o $@
+
+-include $(shell find $(OBJ) -name '*.d' 2>/dev/null)
+
+.PHONY: all
+.DELETE_ON_ERROR:
