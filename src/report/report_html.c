@@ -1,5 +1,6 @@
 /* index.html: the report as a page that works offline, its pictures and
  * plots beside it (report_internal.h). */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -287,7 +288,7 @@ cf_status report_write_html(const report_data *d, const char *dir, const char *f
   char path[4096];
   snprintf(path, sizeof path, "%s/index.html", dir);
   FILE *f = fopen(path, "w");
-  if (!f) return cf_error_set(err, CF_EIO, "%s: cannot write", path);
+  if (!f) return cf_error_set(err, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
   head(f, d, fit_path, version);
   parameter_table(f, d);
   residual_summary(f, d);
@@ -295,7 +296,9 @@ cf_status report_write_html(const report_data *d, const char *dir, const char *f
   plots_and_speed(f, d);
   image_rows(f, d, image_files);
   load_check(f);
-  int failed = ferror(f);
-  failed |= fclose(f) != 0;
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  int failed = ferror(f), why = failed ? errno : 0;
+  if (fclose(f) != 0) failed = 1, why = errno;
+  return failed
+             ? cf_error_set(err, CF_EIO, "%s: could not write: %s", path, strerror(why ? why : EIO))
+             : CF_OK;
 }

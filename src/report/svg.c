@@ -1,6 +1,7 @@
 /* A small SVG writer (svg.h). */
 #include "svg.h"
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -23,7 +24,7 @@ void svg_escape(FILE *f, const char *text) {
 cf_status svg_begin(svg_plot *p, const char *path, int width, int height, const char *title,
                     cf_error *err) {
   p->file = fopen(path, "w");
-  if (!p->file) return cf_error_set(err, CF_EIO, "%s: cannot write", path);
+  if (!p->file) return cf_error_set(err, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
   p->left = 80.0;
   p->top = 36.0;
   p->width = width - 100.0;
@@ -131,8 +132,10 @@ void svg_text(svg_plot *p, double px, double py, const char *anchor, const char 
 
 cf_status svg_end(svg_plot *p, const char *path, cf_error *err) {
   fputs("</svg>\n", p->file);
-  int failed = ferror(p->file);
-  failed |= fclose(p->file) != 0;
+  int failed = ferror(p->file), why = failed ? errno : 0;
+  if (fclose(p->file) != 0) failed = 1, why = errno;
   p->file = NULL;
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not write", path) : CF_OK;
+  return failed
+             ? cf_error_set(err, CF_EIO, "%s: could not write: %s", path, strerror(why ? why : EIO))
+             : CF_OK;
 }
