@@ -150,8 +150,7 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
 #define ABSURD 1e9
 #define MOST 0.5 /* more than half of the capture: the decoding is wrong */
 
-/* The q-quantile of values[0..n) (n > 0; reordered): Wirth's selection. */
-static double quantile(double *values, size_t n, double q) {
+double capture_quantile(double *values, size_t n, double q) {
   const ptrdiff_t k = (ptrdiff_t)(q * (double)(n - 1));
   ptrdiff_t lo = 0, hi = (ptrdiff_t)n - 1;
   while (lo < hi) {
@@ -186,7 +185,7 @@ static cf_status bounds_of(const cf_capture *capture, size_t begin, size_t end, 
   if (!positive) return cf_error_set(err, CF_ENOMEM, "out of memory");
   for (size_t i = 3 * begin; i < 3 * end; ++i)
     if (rgb[i] > 0.0) positive[n++] = rgb[i];
-  b->bright = n ? quantile(positive, n, BRIGHT_QUANTILE) : 0.0;
+  b->bright = n ? capture_quantile(positive, n, BRIGHT_QUANTILE) : 0.0;
   free(positive);
   const cf_capture_spec *spec = &capture->spec;
   b->sigma_from_capture = spec->has_noise && spec->noise_read > 0.0;

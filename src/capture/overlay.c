@@ -6,45 +6,17 @@
 
 #include "capture_internal.h"
 
-/* The k-th smallest of n values (Hoare's selection; reorders them). */
-static float select_kth(float *values, size_t n, size_t k) {
-  size_t lo = 0, hi = n - 1;
-  while (lo < hi) {
-    float pivot = values[lo + (hi - lo) / 2];
-    size_t i = lo, j = hi;
-    while (i <= j) {
-      while (values[i] < pivot) ++i;
-      while (values[j] > pivot) --j;
-      if (i <= j) {
-        float t = values[i];
-        values[i] = values[j];
-        values[j] = t;
-        ++i;
-        if (j == 0) break;
-        --j;
-      }
-    }
-    if (k <= j)
-      hi = j;
-    else if (k >= i)
-      lo = i;
-    else
-      break;
-  }
-  return values[k];
-}
-
 /* The 99.5th percentile of the decoded values: the overlay's white. */
 static double white_point(const cf_image *image, const cf_decode *decode) {
   size_t n = (size_t)image->width * (size_t)image->height;
-  float *values = malloc(n * sizeof *values);
+  double *values = malloc(n * sizeof *values);
   if (!values) return 1.0;
   for (size_t i = 0; i < n; ++i) {
     double rgb[3];
     cf_decode_pixel(decode, image->pixels + i * (size_t)image->channels, image->channels, rgb);
-    values[i] = (float)fmax(rgb[0], fmax(rgb[1], rgb[2]));
+    values[i] = fmax(rgb[0], fmax(rgb[1], rgb[2]));
   }
-  double white = select_kth(values, n, (size_t)(0.995 * (double)(n - 1)));
+  double white = capture_quantile(values, n, 0.995);
   free(values);
   return white > 0.0 ? white : 1.0;
 }
