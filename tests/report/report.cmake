@@ -81,3 +81,24 @@ foreach(case oversized capture folders)
     set_property(TEST report_safety_${case} APPEND PROPERTY ENVIRONMENT CLAYFIT_SANITIZE=1)
   endif()
 endforeach()
+
+# Issue 20, the material library's gallery: the thumbnail (the fitted sphere
+# under the standard light: the analytic Lambert value, the background, the
+# PNG, every model finite, albedo order; its time printed) and the gallery
+# page (hostile names and tags, every thumbnail, the controls; in headless
+# Chromium every thumbnail loads and the sort and filters reorder and hide).
+clayfit_c_test(test_thumbnail SOURCES report/test_thumbnail.c
+               LIBS clayfit_report clayfit_core LABELS report
+               ARGS ${CMAKE_CURRENT_BINARY_DIR}/thumbnail)
+set(GALLERY_DIR ${CMAKE_CURRENT_BINARY_DIR}/gallery)
+clayfit_c_test(test_gallery SOURCES report/test_gallery.c
+               LIBS clayfit_report clayfit_core LABELS report ARGS ${GALLERY_DIR})
+set_tests_properties(test_gallery PROPERTIES FIXTURES_SETUP gallery_page)
+add_test(NAME gallery_page_check
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_gallery.py ${GALLERY_DIR})
+set_tests_properties(gallery_page_check PROPERTIES LABELS "report" FIXTURES_REQUIRED gallery_page)
+add_test(NAME gallery_browser
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_gallery.py ${GALLERY_DIR}
+                 --browser ${GALLERY_DIR}/screenshot.png)
+set_tests_properties(gallery_browser PROPERTIES LABELS "report" FIXTURES_REQUIRED gallery_page
+                     SKIP_RETURN_CODE 77 TIMEOUT 300)
