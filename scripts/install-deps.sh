@@ -15,6 +15,8 @@ packages=(
   clang libclang-rt-14-dev           # libFuzzer for the fuzz targets (scripts/fuzz.sh)
   chromium                           # the report's page tested in a real browser
   libxml2-utils                      # xmllint: the MaterialX and Mitsuba presets' tests
+  libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
+  slurm-wlm munge                    # the tests' private Slurm cluster (scripts/slurm-local.sh)
 )
 # Node.js and npm for the Khronos glTF validator (npm gltf-validator), from
 # Debian unless a node and an npm are already there (another Node.js, such
@@ -56,6 +58,17 @@ if [ "$(id -u)" -ne 0 ]; then
   sudo=(sudo)
 fi
 echo "install-deps: installing ${missing[*]}"
+# munge, slurmctld and slurmd are services: their packages start them. The
+# tests run their own (scripts/slurm-local.sh), so system ones are not
+# wanted; a policy-rc.d that denies every start is put in place while apt
+# runs, unless the machine has one (Debian's container images do).
+policy=/usr/sbin/policy-rc.d
+if [[ " ${missing[*]} " =~ \ (munge|slurm-wlm)\  ]] && [ ! -e "$policy" ]; then
+  trap '"${sudo[@]}" rm -f "$policy"' EXIT
+  printf '#!/bin/sh\n# install-deps.sh: no service starts while it installs\nexit 101\n' \
+    | "${sudo[@]}" tee "$policy" >/dev/null
+  "${sudo[@]}" chmod 755 "$policy"
+fi
 "${sudo[@]}" apt-get update -qq
 DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 install_gltf_validator

@@ -106,6 +106,16 @@ cf_status cf_capture_load(const char *path, const cf_capture_options *options, c
                           cf_error *err);
 void cf_capture_free(cf_capture *capture);
 
+/* Every file loading the capture at path reads: the capture file, the
+ * image list, images, masks, the COLMAP model's files, light files, the
+ * environment map, the normal map (paths resolved as the loader does;
+ * listed, not opened). From the capture file alone, so that the list lives
+ * with its reader (clayfit batch keys its entries by these files). Errors
+ * are the capture file's (cf_capture_load's). Free with
+ * cf_capture_files_free. */
+cf_status cf_capture_files(const char *path, char ***files, size_t *count, cf_error *err);
+void cf_capture_files_free(char **files, size_t count);
+
 const cf_observations *cf_capture_observations(const cf_capture *capture);
 size_t cf_capture_image_count(const cf_capture *capture);
 const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index);

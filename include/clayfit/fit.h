@@ -120,6 +120,38 @@ typedef struct cf_fit_options {
 
 void cf_fit_default_options(cf_fit_options *options, cf_model_id model);
 
+/* A parameter held by name (clayfit fit --hold, a batch manifest's
+ * "hold"): count 1 (that value in every component) or the parameter's
+ * components (3: r, g, b). */
+typedef struct cf_fit_hold {
+  const char *name;
+  int count;
+  double value[3];
+} cf_fit_hold;
+
+enum { CF_FIT_MAX_NAMED = 64 }; /* holds, and frees, at most */
+
+/* The options of `model`: its defaults, with the settings every model
+ * shares taken from `settings` (loss, loss_scale, fit_exposures,
+ * multistart, max_iterations, threads, density, footprint,
+ * footprint_tolerance, budget, sampling), then the holds and the frees
+ * (parameter names; a free fits what would be held for the scale). With
+ * known (the model choice: one flag per hold, then per free), a name the
+ * model lacks is skipped and its flag set for names it has; without, it
+ * is CF_ENOTFOUND. A parameter held twice, or held and freed: CF_EINVAL.
+ * The one way clayfit fit and clayfit batch build a fit's options. */
+cf_status cf_fit_model_options(cf_model_id model, const cf_fit_options *settings,
+                               const cf_fit_hold *holds, int hold_count,
+                               const char *const *frees, int free_count, int *known,
+                               cf_fit_options *options, cf_error *err);
+
+/* Every model's options for the model choice (--model auto): a hold or a
+ * free applies to the models that have the parameter and must name one
+ * that some model has (CF_ENOTFOUND). */
+cf_status cf_fit_ladder_options(const cf_fit_options *settings, const cf_fit_hold *holds,
+                                int hold_count, const char *const *frees, int free_count,
+                                cf_fit_options ladder[CF_MODEL_COUNT], cf_error *err);
+
 /* One start of the multi-start and where it ended. */
 typedef struct cf_fit_start {
   double start[CF_MAX_DIM], end[CF_MAX_DIM];

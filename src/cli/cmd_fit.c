@@ -18,7 +18,7 @@
 #include "core/text_escape.h"
 #include "out_path.h"
 
-enum { MAX_ASSIGNMENTS = 64 };
+enum { MAX_ASSIGNMENTS = CF_FIT_MAX_NAMED };
 
 static void fit_usage(FILE *out) {
   fprintf(out,
@@ -68,90 +68,26 @@ static void fit_usage(FILE *out) {
           CLI_IMAGE_MEMORY_USAGE);
 }
 
-/* --hold and --free into one model's options. With known (the model
- * choice: one flag per hold, then per free), a name the model lacks is
- * skipped and the flags mark the names some model has. */
-static cf_status apply_holds(cf_fit_options *o, const char *const *holds, int hold_count,
-                             const char *const *frees, int free_count, int *known, cf_error *err) {
-  int given[CF_MAX_DIM] = {0};
-  cf_status s = CF_OK;
-  for (int i = 0; s == CF_OK && i < hold_count; ++i) {
-    s = cli_apply_param(o->model, "--hold", holds[i], o->hold_value, given, err);
-    if (known && s == CF_ENOTFOUND)
-      s = CF_OK;
-    else if (known && s == CF_OK)
-      known[i] = 1;
-  }
-  for (int k = 0; k < CF_MAX_DIM; ++k) o->hold[k] = given[k];
-  for (int i = 0; s == CF_OK && i < free_count; ++i) {
-    int slot = 0;
-    const cf_param_info *info = NULL;
-    s = cf_model_param_find(o->model, frees[i], &slot, &info, err);
-    if (known && s == CF_ENOTFOUND) {
-      s = CF_OK;
-      continue;
-    }
-    if (known && s == CF_OK) known[hold_count + i] = 1;
-    for (int c = 0; s == CF_OK && c < info->components; ++c) {
-      if (o->hold[slot + c])
-        return cf_error_set(err, CF_EINVAL, "%s is both held and freed", info->name);
-      o->free[slot + c] = 1;
-    }
-  }
-  return s;
-}
-
-/* The options every model shares. */
-typedef struct fit_settings {
-  cf_loss loss;
-  double loss_scale, density;
-  int fit_exposures, multistart, max_iterations, threads;
-  int footprint;
-  double footprint_tolerance;
-  size_t budget;
-  cf_sampling sampling;
-} fit_settings;
-
-static cf_status model_options(cf_model_id model, const fit_settings *set, const char *const *holds,
-                               int hold_count, const char *const *frees, int free_count, int *known,
-                               cf_fit_options *o, cf_error *err) {
-  cf_fit_default_options(o, model);
-  o->loss = set->loss;
-  o->loss_scale = set->loss_scale;
-  o->fit_exposures = set->fit_exposures;
-  o->multistart = set->multistart;
-  o->max_iterations = set->max_iterations;
-  o->threads = set->threads;
-  o->density = set->density;
-  o->footprint = set->footprint;
-  o->footprint_tolerance = set->footprint_tolerance;
-  o->budget = set->budget;
-  o->sampling = set->sampling;
-  return apply_holds(o, holds, hold_count, frees, free_count, known, err);
-}
-
-/* The options of every model of the ladder (--model auto): a --hold or
- * --free applies to the models that have the parameter, and must name one
- * that some model has. */
-static cf_status ladder_options(const fit_settings *set, const char *const *holds, int hold_count,
-                                const char *const *frees, int free_count,
-                                cf_fit_options options[CF_MODEL_COUNT], cf_error *err) {
-  int known[2 * MAX_ASSIGNMENTS] = {0};
-  cf_status s = CF_OK;
-  for (int m = 0; s == CF_OK && m < CF_MODEL_COUNT; ++m)
-    s = model_options((cf_model_id)m, set, holds, hold_count, frees, free_count, known, &options[m],
-                      err);
-  for (int i = 0; s == CF_OK && i < hold_count + free_count; ++i) {
-    if (known[i]) continue;
-    const char *text = i < hold_count ? holds[i] : frees[i - hold_count];
-    const char *equals = strchr(text, '=');
-    int length = equals ? (int)(equals - text) : (int)strlen(text);
-    s = cf_error_set(err, CF_ENOTFOUND,
-                     "%s %.*s: no model of the ladder has a parameter of that "
-                     "name (see clayfit models)",
-                     i < hold_count ? "--hold" : "--free", length, text);
-  }
-  return s;
+/* One --hold "name=value" (an RGB parameter: "r,g,b" or one number for
+ * all three) into h; the name is kept in name[64]. Which model has the
+ * parameter is the fit layer's to check (cf_fit_model_options). */
+static cf_status parse_hold(const char *text, char *name, cf_fit_hold *h, cf_error *err) {
+  const char *equals = strchr(text, '=');
+  if (!equals || equals == text)
+    return cf_error_set(err, CF_EINVAL,
+                        "--hold '%s': expected name=value (for example "
+                        "albedo=0.8,0.5,0.3 or roughness=0.4)",
+                        text);
+  size_t length = (size_t)(equals - text);
+  if (length >= 64) return cf_error_set(err, CF_EINVAL, "--hold '%s': name too long", text);
+  memcpy(name, text, length);
+  name[length] = '\0';
+  char what[96];
+  snprintf(what, sizeof what, "--hold %s", name);
+  h->name = name;
+  h->count = strchr(equals + 1, ',') ? 3 : 1;
+  return h->count == 3 ? cli_parse_list(equals + 1, what, 3, h->value, err)
+                       : cli_parse_number(equals + 1, what, &h->value[0], err);
 }
 
 static void print_choice(const cf_fit_choice *choice) {
@@ -241,7 +177,7 @@ typedef struct fit_command {
   int hold_count, free_count;
   int trace; /* --trace: the solver's lines on stderr */
   unsigned long long max_image_bytes; /* --max-image-memory, 0: the default */
-  fit_settings set;
+  cf_fit_options set; /* the settings every model shares (cf_fit_model_options) */
 } fit_command;
 
 static cf_status parse_loss(const char *text, cf_loss *loss, cf_error *err) {
@@ -310,7 +246,7 @@ static cf_status parse_positive(const char *text, const char *flag, double *out,
 }
 
 /* One option with a value into the settings. */
-static cf_status parse_setting(int c, const char *arg, fit_settings *set, cf_error *err) {
+static cf_status parse_setting(int c, const char *arg, cf_fit_options *set, cf_error *err) {
   long count = 0;
   cf_status s = CF_OK;
   switch (c) {
@@ -368,21 +304,9 @@ static const struct option fit_long_options[] = {
  * (--help, a bad option, too many --hold or --free; other errors are left
  * in *s and err for the caller). */
 static int parse_command(int argc, char **argv, fit_command *cmd, cf_status *s, cf_error *err) {
-  cf_fit_options defaults;
-  cf_fit_default_options(&defaults, CF_MODEL_LAMBERT);
   memset(cmd, 0, sizeof *cmd);
   cmd->model_text = "auto";
-  cmd->set = (fit_settings){defaults.loss,
-                            defaults.loss_scale,
-                            defaults.density,
-                            defaults.fit_exposures,
-                            defaults.multistart,
-                            100,
-                            2,
-                            defaults.footprint,
-                            defaults.footprint_tolerance,
-                            defaults.budget,
-                            defaults.sampling};
+  cf_fit_default_options(&cmd->set, CF_MODEL_LAMBERT); /* 100 iterations, 2 threads */
   optind = 1;
   opterr = 0;
   for (int c; *s == CF_OK && (c = getopt_long(argc, argv, "o:", fit_long_options, NULL)) != -1;) {
@@ -434,18 +358,22 @@ static cf_status fit_options(const fit_command *cmd, int *automatic, cf_model_id
                              cf_fit_options ladder[CF_MODEL_COUNT], cf_error *err) {
   *automatic = strcmp(cmd->model_text, "auto") == 0;
   *model = CF_MODEL_CLAY;
+  cf_fit_hold holds[MAX_ASSIGNMENTS];
+  char names[MAX_ASSIGNMENTS][64];
   cf_status s = CF_OK;
-  if (*automatic) {
-    s = ladder_options(&cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count, ladder,
-                       err);
+  for (int i = 0; s == CF_OK && i < cmd->hold_count; ++i)
+    s = parse_hold(cmd->holds[i], names[i], &holds[i], err);
+  if (s == CF_OK && *automatic) {
+    s = cf_fit_ladder_options(&cmd->set, holds, cmd->hold_count, cmd->frees, cmd->free_count,
+                              ladder, err);
     for (int m = 0; s == CF_OK && m < CF_MODEL_COUNT; ++m)
       s = cf_fit_check_options(&ladder[m], err);
     return s;
   }
-  s = cf_model_find(cmd->model_text, model, err);
+  if (s == CF_OK) s = cf_model_find(cmd->model_text, model, err);
   if (s == CF_OK)
-    s = model_options(*model, &cmd->set, cmd->holds, cmd->hold_count, cmd->frees, cmd->free_count,
-                      NULL, &ladder[*model], err);
+    s = cf_fit_model_options(*model, &cmd->set, holds, cmd->hold_count, cmd->frees,
+                             cmd->free_count, NULL, &ladder[*model], err);
   if (s == CF_OK) s = cf_fit_check_options(&ladder[*model], err);
   return s;
 }

@@ -21,6 +21,7 @@ static const command commands[] = {
     {"fit", cmd_fit, "fit a model to a capture: parameters, uncertainty, fit.json"},
     {"export", cmd_export, "a fit's material as a preset: json, MaterialX, glTF, Blender, Mitsuba"},
     {"report", cmd_report, "the residual report of a fit: HTML page, pictures, plots"},
+    {"batch", cmd_batch, "fit many captures into a material library (docs/batch.md)"},
     {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
 };
 enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };

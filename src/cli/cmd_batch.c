@@ -1,0 +1,268 @@
+/* clayfit batch: the captures of a manifest fitted into a material library
+ * (docs/batch.md), only those missing, failed for other inputs, or stale. */
+#define _DEFAULT_SOURCE /* sigaction's SA_ flags */
+#include <getopt.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "args.h"
+#include "clayfit/batch.h"
+#include "cli.h"
+#include "core/file.h"
+
+static void batch_usage(FILE *out) {
+  fprintf(out,
+          "usage: clayfit batch MANIFEST -o LIBRARY [--executor local] [--jobs N]\n"
+          "                     [--threads T] [--force]\n\n"
+          "Fits every capture of MANIFEST (data_schema/manifest.schema.json) into\n"
+          "LIBRARY/<name>/: fit.json, every preset (presets/), the report (report/) and\n"
+          "entry.json; a failed capture leaves LIBRARY/<name>/failed.json and the others\n"
+          "go on. LIBRARY/library.json lists the entries (data_schema/library.schema.json).\n"
+          "Each entry is keyed by a hash of the files its capture reads, its options and\n"
+          "clayfit's build: a run fits only the entries missing or whose key changed\n"
+          "(docs/batch.md).\n\n"
+          "  --executor local  (default) a pool of worker processes on this machine\n"
+          "  --jobs N          tasks at a time (default 1)\n"
+          "  --threads T       solver threads per task (default: the CPUs / N, at least 1)\n"
+          "  --force           re-fit every entry\n"
+          "  --task I          (internal) run entry I only, in this process: what each\n"
+          "                    worker runs; the caller holds the library's lock\n\n"
+          "exit status: 0 every entry fitted, 1 some failed (named on stderr) or the\n"
+          "library is locked by another batch, 2 invalid command line or manifest\n");
+}
+
+typedef struct batch_command {
+  const char *manifest, *library, *executor;
+  long jobs, threads, task;
+  int force;
+} batch_command;
+
+static const struct option batch_options[] = {{"output", required_argument, NULL, 'o'},
+                                              {"executor", required_argument, NULL, 'e'},
+                                              {"jobs", required_argument, NULL, 'j'},
+                                              {"threads", required_argument, NULL, 't'},
+                                              {"force", no_argument, NULL, 'f'},
+                                              {"task", required_argument, NULL, 'T'},
+                                              {"help", no_argument, NULL, 'h'},
+                                              {0}};
+
+/* Returns -1 to go on, else the exit status. */
+static int parse_command(int argc, char **argv, batch_command *cmd) {
+  *cmd = (batch_command){NULL, NULL, "local", 1, 0, -1, 0};
+  cf_error err = {0};
+  cf_status s = CF_OK;
+  optind = 1;
+  opterr = 0;
+  for (int c; s == CF_OK && (c = getopt_long(argc, argv, "o:j:", batch_options, NULL)) != -1;) {
+    if (c == 'o')
+      cmd->library = optarg;
+    else if (c == 'e')
+      cmd->executor = optarg;
+    else if (c == 'j')
+      s = cli_parse_count(optarg, "--jobs", 1, 1024, &cmd->jobs, &err);
+    else if (c == 't')
+      s = cli_parse_count(optarg, "--threads", 1, 256, &cmd->threads, &err);
+    else if (c == 'T')
+      s = cli_parse_count(optarg, "--task", 0, CF_BATCH_MAX_ENTRIES - 1, &cmd->task, &err);
+    else if (c == 'f')
+      cmd->force = 1;
+    else if (c == 'h') {
+      batch_usage(stdout);
+      return CLI_EXIT_OK;
+    } else
+      return cli_bad_option("batch", argv);
+  }
+  if (s == CF_OK && optind + 1 != argc)
+    s = cf_error_set(&err, CF_EINVAL, "expected one manifest (see clayfit batch --help)");
+  if (s == CF_OK && !cmd->library) s = cf_error_set(&err, CF_EINVAL, "-o LIBRARY is required");
+  if (s == CF_OK && strcmp(cmd->executor, "local") != 0)
+    s = cf_error_set(&err, CF_EINVAL, "--executor: '%s' is not local", cmd->executor);
+  if (s != CF_OK) {
+    cli_report("batch", err.message);
+    return CLI_EXIT_USAGE;
+  }
+  cmd->manifest = argv[optind];
+  if (cmd->threads == 0) {
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    cmd->threads = cpus / cmd->jobs > 1 ? cpus / cmd->jobs : 1;
+  }
+  return -1;
+}
+
+/* --task I: one entry in this process. */
+static int run_task(const batch_command *cmd, const cf_batch_manifest *m,
+                    const cli_context *ctx) {
+  cf_error err = {0};
+  cf_batch_task_options options = {(int)cmd->threads};
+  if (cmd->task >= (long)m->count) {
+    fprintf(stderr, "clayfit batch: --task %ld: the manifest has %zu captures\n", cmd->task,
+            m->count);
+    return CLI_EXIT_USAGE;
+  }
+  cf_status s = cf_batch_task_run(m, (size_t)cmd->task, cmd->library, &options, &err);
+  if (s == CF_OK) return CLI_EXIT_OK;
+  if (!ctx->quiet) /* else it is in failed.json */
+    fprintf(stderr, "clayfit batch: %s: %s\n", m->entries[cmd->task].name, err.message);
+  return CLI_EXIT_FAILURE;
+}
+
+/* The entries to fit: missing, failed with another key, stale; all with
+ * --force. */
+static size_t plan(const batch_command *cmd, const cf_batch_manifest *m, size_t *todo,
+                   size_t *up_to_date, cf_error *err) {
+  size_t count = 0;
+  *up_to_date = 0;
+  for (size_t i = 0; i < m->count; ++i) {
+    char key[CF_BATCH_KEY_SIZE], have[CF_BATCH_KEY_SIZE];
+    if (cf_batch_entry_key(&m->entries[i], key, err) != CF_OK) return (size_t)-1;
+    cf_batch_state state = cf_batch_entry_state(cmd->library, m->entries[i].name, have);
+    if (!cmd->force && state != CF_BATCH_MISSING && strcmp(key, have) == 0)
+      (*up_to_date)++;
+    else
+      todo[count++] = i;
+  }
+  return count;
+}
+
+typedef struct progress_context {
+  const cf_batch_manifest *manifest;
+  const size_t *todo;
+  int quiet;
+} progress_context;
+
+static void progress_line(void *user, const cf_batch_progress *p, size_t finished,
+                          int wait_status) {
+  const progress_context *c = user;
+  if (c->quiet) return;
+  const char *name = c->manifest->entries[c->todo[finished]].name;
+  const char *how = WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0 ? "fitted"
+                    : WIFSIGNALED(wait_status)                              ? "killed"
+                                                                            : "failed";
+  fprintf(stderr, "clayfit batch: %s %s; %zu done, %zu running, %zu failed, %zu pending\n", name,
+          how, p->done, p->running, p->failed, p->pending);
+  fflush(stderr);
+}
+
+static volatile int interrupted;
+static void on_signal(int signal) {
+  (void)signal;
+  interrupted = 1;
+}
+
+/* SIGINT and SIGTERM set the flag, without restarting waitpid. */
+static void catch_signals(void) {
+  struct sigaction action;
+  memset(&action, 0, sizeof action);
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, NULL);
+  sigaction(SIGTERM, &action, NULL);
+}
+
+/* Every entry of the manifest that is not fitted, named with its reason
+ * (this run's failures, and the failures of earlier runs whose inputs did
+ * not change); how many. */
+static size_t report_failures(const batch_command *cmd, const cf_batch_manifest *m,
+                              const int *ran_bad) {
+  size_t failed = 0;
+  for (size_t i = 0; i < m->count; ++i) {
+    char key[CF_BATCH_KEY_SIZE], reason[1024];
+    cf_batch_state state = cf_batch_entry_state(cmd->library, m->entries[i].name, key);
+    if (state == CF_BATCH_FITTED && ran_bad[i]) {
+      failed++;
+      fprintf(stderr, "clayfit batch: failed: %s: its task died (killed, or crashed); the entry "
+              "is the earlier, stale one\n", m->entries[i].name);
+    }
+    if (state == CF_BATCH_FITTED) continue;
+    failed++;
+    cf_batch_failed_reason(cmd->library, m->entries[i].name, reason, sizeof reason);
+    fprintf(stderr, "clayfit batch: failed: %s: %s\n", m->entries[i].name,
+            state == CF_BATCH_FAILED ? reason
+                                     : "no entry: its task died (killed, or crashed) or did not run");
+  }
+  return failed;
+}
+
+/* Under the lock: plan, run, library.json. */
+static int run_locked(const batch_command *cmd, const cf_batch_manifest *m,
+                      const cli_context *ctx) {
+  cf_error err = {0};
+  int cleaned = cf_batch_clean(cmd->library);
+  if (cleaned && !ctx->quiet)
+    fprintf(stderr, "clayfit batch: cleaned %d leftover%s of interrupted tasks\n", cleaned,
+            cleaned == 1 ? "" : "s");
+  size_t *todo = calloc(m->count, sizeof *todo);
+  int *ok = calloc(m->count, sizeof *ok);
+  size_t up_to_date = 0, count = todo && ok ? plan(cmd, m, todo, &up_to_date, &err) : 0;
+  cf_status s = !todo || !ok ? cf_error_set(&err, CF_ENOMEM, "out of memory")
+                : count == (size_t)-1 ? CF_EIO
+                                      : CF_OK;
+  if (s == CF_OK) {
+    printf("%zu entries: %zu up to date, %zu to fit (%ld jobs, %ld threads each)\n", m->count,
+           up_to_date, count, cmd->jobs, cmd->threads);
+    fflush(stdout);
+    progress_context context = {m, todo, ctx->quiet};
+    cf_batch_local_options options = {"/proc/self/exe", cmd->manifest, cmd->library,
+                                      (int)cmd->jobs,    (int)cmd->threads, progress_line,
+                                      &context,          &interrupted};
+    catch_signals();
+    s = cf_batch_run_local(&options, todo, count, ok, &err);
+    if (s != CF_OK) cf_batch_clean(cmd->library); /* the killed tasks' folders */
+  }
+  size_t failed = 0, ran_ok = 0;
+  int *ran_bad = s == CF_OK ? calloc(m->count, sizeof *ran_bad) : NULL;
+  if (s == CF_OK && !ran_bad) s = cf_error_set(&err, CF_ENOMEM, "out of memory");
+  for (size_t i = 0; s == CF_OK && i < count; ++i) {
+    ran_ok += ok[i] != 0;
+    ran_bad[todo[i]] = !ok[i];
+  }
+  if (s == CF_OK) cf_batch_clean(cmd->library); /* what died tasks left */
+  if (s == CF_OK) failed = report_failures(cmd, m, ran_bad);
+  free(ran_bad);
+  cf_error write_err = {0};
+  cf_status written = cf_batch_library_write(cmd->library, m, &write_err);
+  if (written != CF_OK) cli_report("batch", write_err.message);
+  if (s != CF_OK) cli_report("batch", err.message);
+  if (s == CF_OK)
+    printf("fitted %zu of %zu; %zu of the %zu entries failed\n", ran_ok, count, failed,
+           m->count);
+  free(todo);
+  free(ok);
+  return s == CF_OK && written == CF_OK && failed == 0 ? CLI_EXIT_OK : CLI_EXIT_FAILURE;
+}
+
+int cmd_batch(int argc, char **argv, cli_context *ctx) {
+  batch_command cmd;
+  int exit_status = parse_command(argc, argv, &cmd);
+  if (exit_status >= 0) return exit_status;
+  cf_batch_manifest m;
+  cf_error err = {0};
+  cf_status s = cf_batch_manifest_read(cmd.manifest, &m, &err);
+  if (s != CF_OK) {
+    cli_report("batch", err.message);
+    return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
+  }
+  if (cmd.task >= 0) {
+    exit_status = run_task(&cmd, &m, ctx);
+    cf_batch_manifest_free(&m);
+    return exit_status;
+  }
+  int taken_over = 0;
+  s = cf_make_dirs(cmd.library, &err);
+  if (s == CF_OK) s = cf_batch_lock(cmd.library, &taken_over, &err);
+  if (s != CF_OK) {
+    cli_report("batch", err.message);
+    cf_batch_manifest_free(&m);
+    return CLI_EXIT_FAILURE;
+  }
+  if (taken_over && !ctx->quiet)
+    fprintf(stderr, "clayfit batch: took over the stale lock of a batch that is gone\n");
+  exit_status = run_locked(&cmd, &m, ctx);
+  cf_batch_unlock(cmd.library);
+  cf_batch_manifest_free(&m);
+  return exit_status;
+}
