@@ -108,7 +108,8 @@ void cf_batch_unlock(const char *library);
 int cf_batch_clean(const char *library);
 
 /* Write LIBRARY/library.json (data_schema/library.schema.json) for the
- * manifest's entries, atomically. */
+ * manifest's entries, atomically, then LIBRARY/index.html, the gallery of
+ * the same records. */
 cf_status cf_batch_library_write(const char *library, const cf_batch_manifest *manifest,
                                  cf_error *err);
 
@@ -130,16 +131,28 @@ typedef struct cf_batch_task_options {
 cf_status cf_batch_task_run(const cf_batch_manifest *manifest, size_t index, const char *library,
                             const cf_batch_task_options *options, cf_error *err);
 
-/* ---- the local executor ---- */
+/* 1 if LIBRARY/<name>/failed.json says its task died without a result
+ * ("retry": true, written by the Slurm executor for a cancelled, timed-out
+ * or killed task): the next run fits it again although its key is the
+ * same. */
+int cf_batch_failed_retry(const char *library, const char *name);
+
+/* ---- the executors ---- */
 
 typedef struct cf_batch_progress {
   size_t done, running, failed, pending;
 } cf_batch_progress;
 
-/* Called as each task ends: finished indexes todo[], wait_status is
- * waitpid's. */
+/* How a task ended. */
+typedef enum cf_batch_outcome {
+  CF_BATCH_TASK_FITTED, /* exited 0: its entry is fitted */
+  CF_BATCH_TASK_FAILED, /* failed.json written by the task */
+  CF_BATCH_TASK_KILLED  /* died without a result (signal, scancel, time limit) */
+} cf_batch_outcome;
+
+/* Called as each task ends: finished indexes todo[]. */
 typedef void (*cf_batch_progress_fn)(void *user, const cf_batch_progress *progress,
-                                     size_t finished, int wait_status);
+                                     size_t finished, cf_batch_outcome outcome);
 
 typedef struct cf_batch_local_options {
   const char *exe;      /* the clayfit executable (/proc/self/exe) */
@@ -158,6 +171,56 @@ typedef struct cf_batch_local_options {
  * not start or *interrupted was set (every worker is then killed). */
 cf_status cf_batch_run_local(const cf_batch_local_options *options, const size_t *todo,
                              size_t count, int *ok, cf_error *err);
+
+/* ---- the Slurm executor (docs/batch.md) ---- */
+
+typedef struct cf_batch_slurm_options {
+  const char *exe;      /* the clayfit executable, absolute (the nodes run it) */
+  const char *manifest; /* absolute */
+  const char *library;  /* absolute: the shared file system */
+  const cf_batch_manifest *entries;
+  int threads;          /* solver threads per task; 0: $SLURM_CPUS_PER_TASK */
+  int cpus_per_task, max_running;
+  const char *partition, *time, *mem; /* NULL: the cluster's default */
+  char *const *sbatch_args;           /* passed verbatim, each one argument */
+  int sbatch_arg_count;
+  cf_batch_progress_fn progress; /* may be NULL */
+  void *progress_user;
+  volatile int *interrupted; /* set by a signal handler: scancel the job */
+} cf_batch_slurm_options;
+
+/* The job of one run: its script and the sbatch command that submits it. */
+typedef struct cf_batch_slurm_job {
+  char script[4096];      /* LIBRARY/.slurm/job-<UTC time>.sh */
+  char **argv;            /* sbatch's, NULL-terminated */
+  int argc;
+  char id[64];            /* the job id once submitted */
+  unsigned long long *before; /* per task: LIBRARY/<name>'s inode before, 0 if none */
+} cf_batch_slurm_job;
+
+/* Write the job script of the tasks todo[0..count) (manifest indices:
+ * array index i runs entry todo[i]) into LIBRARY/.slurm/ and build the
+ * sbatch command. count > 0. */
+cf_status cf_batch_slurm_prepare(const cf_batch_slurm_options *options, const size_t *todo,
+                                 size_t count, cf_batch_slurm_job *job, cf_error *err);
+void cf_batch_slurm_job_free(cf_batch_slurm_job *job);
+
+/* The command, each word shell-quoted, into out (truncated to size). */
+void cf_batch_slurm_command(const cf_batch_slurm_job *job, char *out, size_t size);
+
+/* Run sbatch (posix_spawnp, no shell): job->id set. CF_EIO with sbatch's
+ * stderr when it fails or cannot run. */
+cf_status cf_batch_slurm_submit(cf_batch_slurm_job *job, cf_error *err);
+
+/* Wait for the submitted job: squeue for pending and running, each entry's
+ * own result (a new LIBRARY/<name>) for done and failed. A task that
+ * squeue no longer lists as pending or running and that left no result
+ * died: LIBRARY/<name>/failed.json records why (unless an earlier entry
+ * is there, which is kept). ok[i] (for todo[i]) is 1 when fitted. CF_EIO
+ * when squeue keeps failing or *interrupted was set (the job is then
+ * cancelled and its tasks waited for). */
+cf_status cf_batch_slurm_wait(const cf_batch_slurm_options *options, const cf_batch_slurm_job *job,
+                              const size_t *todo, size_t count, int *ok, cf_error *err);
 
 #ifdef __cplusplus
 }

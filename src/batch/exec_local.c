@@ -70,7 +70,10 @@ cf_status cf_batch_run_local(const cf_batch_local_options *o, const size_t *todo
       ok[i] = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       progress.running--;
       ok[i] ? progress.done++ : progress.failed++;
-      if (o->progress) o->progress(o->progress_user, &progress, i, status);
+      cf_batch_outcome how = ok[i]                 ? CF_BATCH_TASK_FITTED
+                             : WIFSIGNALED(status) ? CF_BATCH_TASK_KILLED
+                                                   : CF_BATCH_TASK_FAILED;
+      if (o->progress) o->progress(o->progress_user, &progress, i, how);
     }
   }
   if (s != CF_OK) kill_all(pids, o->jobs); /* a worker could not start */

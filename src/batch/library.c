@@ -114,6 +114,18 @@ void cf_batch_failed_reason(const char *library, const char *name, char *out, si
   json_decref(root);
 }
 
+int cf_batch_failed_retry(const char *library, const char *name) {
+  char path[4096];
+  if (snprintf(path, sizeof path, "%s/%s/failed.json", library, name) >= (int)sizeof path) return 0;
+  if (!cf_path_exists(path)) return 0;
+  json_t *root = NULL;
+  cf_error ignored = {0};
+  if (json_load_object(path, SMALL_JSON_MAX, &root, &ignored) != CF_OK) return 0;
+  int retry = json_is_true(json_object_get(root, "retry"));
+  json_decref(root);
+  return retry;
+}
+
 /* ---- the lock ---- */
 
 /* A process's start time in clock ticks since boot (/proc/PID/stat, field

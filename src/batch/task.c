@@ -1,6 +1,7 @@
 /* One entry of a batch, in this process: the capture loaded, fitted,
- * fit.json, every preset and the report written into the task's own
- * folder, then entry.json, and the folder renamed into place. A failure at
+ * fit.json, every preset, the report and thumbnail.png written into the
+ * task's own folder, then entry.json (with each step's time), and the
+ * folder renamed into place. A failure at
  * any step leaves failed.json (its reason and the task's log) as the
  * entry instead. */
 #define _DEFAULT_SOURCE /* gmtime_r, getrusage */
@@ -17,6 +18,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit_file.h"
 #include "clayfit/report.h"
+#include "clayfit/thumbnail.h"
 #include "core/clock.h"
 #include "core/file.h"
 #include "core/json_reader.h"
@@ -30,7 +32,12 @@ typedef struct task {
   json_t *log; /* array of lines */
   char started[32];
   double start_wall;
+  double seconds[5]; /* wall time of each step (task_step), for entry.json */
 } task;
+
+/* The steps a task times (entry.json's "timing"). */
+typedef enum task_step { STEP_LOAD, STEP_FIT, STEP_PRESETS, STEP_REPORT, STEP_THUMBNAIL } task_step;
+static const char *const step_names[] = {"load", "fit", "presets", "report", "thumbnail"};
 
 static void task_log(task *t, const char *format, ...) {
   char line[1200];
@@ -137,22 +144,54 @@ static cf_status report(task *t, const cf_capture *capture, const cf_fit_file *f
   return s;
 }
 
-/* The fit, the presets and the report, into the task's folder. */
+/* The fitted sphere under the standard light (docs/report.md), from the
+ * fit as fit.json has it, so that it equals what `clayfit library compare`
+ * renders from the same file. */
+static cf_status thumbnail(task *t, const cf_fit_file *file, cf_error *err) {
+  char path[4096];
+  cf_status s = in_tmp(t, "thumbnail.png", path, sizeof path, err);
+  if (s == CF_OK) s = cf_report_write_thumbnail(&file->result, NULL, path, err);
+  return s;
+}
+
+/* Add the wall time since *mark to step's, and reset the mark. */
+static void timed(task *t, task_step step, double *mark) {
+  double now = cf_now_seconds();
+  t->seconds[step] += now - *mark;
+  *mark = now;
+}
+
+/* The fit, the presets, the report and the thumbnail, into the task's
+ * folder. */
 static cf_status work(task *t, int threads, cf_error *err) {
   cf_capture *capture = NULL;
+  double mark = cf_now_seconds();
   cf_status s = load(t, &capture, err);
+  timed(t, STEP_LOAD, &mark);
   if (s == CF_OK) s = fit(t, capture, threads, err);
   char path[4096];
   cf_fit_file file;
   int read = 0;
   if (s == CF_OK) s = in_tmp(t, "fit.json", path, sizeof path, err);
   if (s == CF_OK) s = cf_fit_file_read(path, &file, err), read = s == CF_OK;
+  timed(t, STEP_FIT, &mark);
   if (s == CF_OK) s = presets(t, &file, err);
+  timed(t, STEP_PRESETS, &mark);
   if (s == CF_OK) task_log(t, "writing the report");
   if (s == CF_OK) s = report(t, capture, &file, err);
+  timed(t, STEP_REPORT, &mark);
+  if (s == CF_OK) s = thumbnail(t, &file, err);
+  timed(t, STEP_THUMBNAIL, &mark);
   if (read) cf_fit_file_free(&file);
   cf_capture_free(capture);
   return s;
+}
+
+static json_t *timing_of(const task *t) {
+  json_t *timing = json_object();
+  for (int i = 0; timing && i < (int)(sizeof step_names / sizeof *step_names); ++i)
+    json_object_set_new(timing, step_names[i], json_real(t->seconds[i]));
+  return timing;
 }
 
 /* entry.json, or failed.json (with the reason), into the task's folder. */
@@ -169,6 +208,7 @@ static cf_status record(task *t, int threads, double cpu0, const char *reason, c
       "started", t->started, "ended", ended, "wall_seconds", cf_now_seconds() - t->start_wall,
       "cpu_seconds", cpu_seconds() - cpu0, "threads", threads, "pid", (json_int_t)getpid());
   if (!doc) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  json_object_set_new(doc, "timing", timing_of(t));
   if (reason) {
     json_object_set_new(doc, "reason", json_text(reason));
     json_object_set(doc, "log", t->log);

@@ -24,6 +24,7 @@ int cmd_fit(int argc, char **argv, cli_context *ctx);
 int cmd_report(int argc, char **argv, cli_context *ctx);
 int cmd_export(int argc, char **argv, cli_context *ctx);
 int cmd_batch(int argc, char **argv, cli_context *ctx);
+int cmd_library(int argc, char **argv, cli_context *ctx); /* clayfit library compare */
 
 /* A progress line on stderr ("clayfit synth: rendering images 5/16"),
  * rewritten in place; user is the command's name. Ends the line when

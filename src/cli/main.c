@@ -22,6 +22,7 @@ static const command commands[] = {
     {"export", cmd_export, "a fit's material as a preset: json, MaterialX, glTF, Blender, Mitsuba"},
     {"report", cmd_report, "the residual report of a fit: HTML page, pictures, plots"},
     {"batch", cmd_batch, "fit many captures into a material library (docs/batch.md)"},
+    {"library", cmd_library, "a material library's entries: 'library compare A B'"},
     {"bench", cmd_bench, "benchmarks: 'bench eval' (evaluator speed)"},
 };
 enum { COMMAND_COUNT = sizeof commands / sizeof commands[0] };

@@ -137,7 +137,8 @@ glossy = next(e for e in library["entries"] if e["name"] == "glossy")
 fit_glossy = json.load(open(os.path.join(LIBRARY, "glossy", "fit.json")))
 check(glossy["params"]["f0"]["value"] == fit_glossy["params"]["f0"]["value"] == 0.05
       and glossy["params"]["f0"]["status"] == "held", "library.json: the held f0")
-check(glossy["tags"]["body"] == "porcelain" and glossy["thumbnail"] is None, "tags, thumbnail")
+check(glossy["tags"]["body"] == "porcelain" and glossy["thumbnail"] == "glossy/thumbnail.png",
+      "tags, thumbnail")
 
 # ---- the same command again: nothing to do ----
 before = {n: entry_stamp(n) for n in CAPTURES}

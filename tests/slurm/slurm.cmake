@@ -19,7 +19,10 @@ foreach(check array scancel)
   add_test(NAME slurm_${check}
            COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/slurm/check_${check}.sh
                    ${CLAYFIT_SLURM_STATE} ${CMAKE_CURRENT_BINARY_DIR}/slurm_${check})
-  set_tests_properties(slurm_${check} PROPERTIES FIXTURES_REQUIRED slurm)
+  # one test at a time on the 2-CPU cluster: slurm_scancel needs both of its
+  # elements running at once, which another test's tasks can prevent
+  set_tests_properties(slurm_${check} PROPERTIES FIXTURES_REQUIRED slurm
+                       RESOURCE_LOCK slurm_cluster)
 endforeach()
 set_tests_properties(slurm_start slurm_stop slurm_array slurm_scancel PROPERTIES
                      LABELS "slurm;slow" SKIP_RETURN_CODE 77 TIMEOUT 180)
