@@ -7,8 +7,9 @@
 cat >"$out/task.sh" <<'TASK'
 #!/bin/sh
 echo $$ >"$1/pid.$SLURM_ARRAY_TASK_ID"
-sleep 300
-touch "$1/done.$SLURM_ARRAY_TASK_ID"
+# (only if sleep ended by itself: scancel signals sleep and this shell
+# separately, and the shell may outlive sleep by a moment)
+sleep 300 && touch "$1/done.$SLURM_ARRAY_TASK_ID"
 TASK
 
 job=$(sbatch --parsable --array=0-1 -D "$out" -o "$out/log.%a" "$out/task.sh" "$out")
