@@ -136,8 +136,4 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
  * observation's irradiance. Call once, after every image is loaded. */
 cf_status capture_apply_reference(cf_capture *capture, cf_error *err);
 
-/* The q-quantile (0 <= q <= 1) of values[0..n), n > 0, the element of rank
- * floor(q (n - 1)); reorders them (Wirth's selection, observations.c). */
-double capture_quantile(double *values, size_t n, double q);
-
 #endif /* CLAYFIT_CAPTURE_INTERNAL_H */

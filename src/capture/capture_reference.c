@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "capture_internal.h"
+#include "core/order_statistics.h"
 
 #define REFERENCE_PI 3.14159265358979323846
 
@@ -24,17 +25,6 @@ enum { MIN_REFERENCE_PIXELS = 16 };
 /* The channels' median ratios may disagree by this much (relative to s)
  * before a warning says the albedo given may be wrong. */
 static const double channel_tolerance = 0.03;
-
-static int compare_doubles(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-/* The median of n > 0 values (sorted in place). */
-static double median(double *values, size_t n) {
-  qsort(values, n, sizeof *values, compare_doubles);
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 static double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -153,10 +143,10 @@ static cf_status summarise(cf_capture *capture, double *ratios, size_t used, cf_
   if (!channel) return cf_error_set(err, CF_ENOMEM, "out of memory for the reference");
   for (int c = 0; c < 3; ++c) {
     for (size_t i = 0; i < used; ++i) channel[i] = ratios[3 * i + (size_t)c];
-    capture->reference_channel_scales[c] = median(channel, used);
+    capture->reference_channel_scales[c] = order_median(channel, used);
   }
   free(channel);
-  double s = median(ratios, 3 * used);
+  double s = order_median(ratios, 3 * used);
   if (!(s > 0.0) || !isfinite(s))
     return cf_error_set(err, CF_EINVAL,
                         "%s: reference: the target's measured radiance is not positive (median "
@@ -165,7 +155,7 @@ static cf_status summarise(cf_capture *capture, double *ratios, size_t used, cf_
                         spec->path, s);
   for (size_t i = 0; i < 3 * used; ++i) ratios[i] = fabs(ratios[i] - s);
   capture->reference_scale = s;
-  capture->reference_spread = 1.4826 * median(ratios, 3 * used) / s;
+  capture->reference_spread = 1.4826 * order_median(ratios, 3 * used) / s;
   capture->reference_pixels = used;
   const double *sc = capture->reference_channel_scales;
   double disagreement = (fmax(sc[0], fmax(sc[1], sc[2])) - fmin(sc[0], fmin(sc[1], sc[2]))) / s;

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "capture_internal.h"
+#include "core/order_statistics.h"
 
 /* Make room for `extra` more observations (doubling). */
 static cf_status reserve(cf_capture *capture, size_t extra, cf_error *err) {
@@ -150,27 +151,6 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
 #define ABSURD 1e9
 #define MOST 0.5 /* more than half of the capture: the decoding is wrong */
 
-double capture_quantile(double *values, size_t n, double q) {
-  const ptrdiff_t k = (ptrdiff_t)(q * (double)(n - 1));
-  ptrdiff_t lo = 0, hi = (ptrdiff_t)n - 1;
-  while (lo < hi) {
-    const double pivot = values[k];
-    ptrdiff_t i = lo, j = hi;
-    do {
-      while (values[i] < pivot) ++i;
-      while (pivot < values[j]) --j;
-      if (i <= j) {
-        double t = values[i];
-        values[i++] = values[j];
-        values[j--] = t;
-      }
-    } while (i <= j);
-    if (j < k) lo = i;
-    if (k < i) hi = j;
-  }
-  return values[k];
-}
-
 /* The bounds of radiance for observations [begin, end) of one image. */
 typedef struct radiance_bounds {
   double low, high, sigma, bright;
@@ -185,7 +165,8 @@ static cf_status bounds_of(const cf_capture *capture, size_t begin, size_t end, 
   if (!positive) return cf_error_set(err, CF_ENOMEM, "out of memory");
   for (size_t i = 3 * begin; i < 3 * end; ++i)
     if (rgb[i] > 0.0) positive[n++] = rgb[i];
-  b->bright = n ? capture_quantile(positive, n, BRIGHT_QUANTILE) : 0.0;
+  b->bright =
+      n ? order_kth_smallest(positive, n, (size_t)(BRIGHT_QUANTILE * (double)(n - 1))) : 0.0;
   free(positive);
   const cf_capture_spec *spec = &capture->spec;
   b->sigma_from_capture = spec->has_noise && spec->noise_read > 0.0;

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "capture_internal.h"
+#include "core/order_statistics.h"
 
 /* The 99.5th percentile of the decoded values: the overlay's white. */
 static double white_point(const cf_image *image, const cf_decode *decode) {
@@ -16,7 +17,7 @@ static double white_point(const cf_image *image, const cf_decode *decode) {
     cf_decode_pixel(decode, image->pixels + i * (size_t)image->channels, image->channels, rgb);
     values[i] = fmax(rgb[0], fmax(rgb[1], rgb[2]));
   }
-  double white = capture_quantile(values, n, 0.995);
+  double white = order_kth_smallest(values, n, (size_t)(0.995 * (double)(n - 1)));
   free(values);
   return white > 0.0 ? white : 1.0;
 }

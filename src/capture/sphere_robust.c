@@ -4,14 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/order_statistics.h"
 #include "sphere_silhouette.h"
 
 enum { MAX_ROUNDS = 20, MIN_RAYS = 5 };
-
-static int compare_doubles(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
 
 cf_status cf_sphere_from_silhouettes_robust(const cf_silhouette_view *views, size_t num_views,
                                             double min_px, cf_sphere_fit *fit, double *kept,
@@ -33,8 +29,7 @@ cf_status cf_sphere_from_silhouettes_robust(const cf_silhouette_view *views, siz
     for (size_t v = 0, i = 0; v < num_views; ++v)
       for (size_t r = 0; r < views[v].count; ++r, ++i)
         deviations[i] = sorted[i] = cf_sphere_ray_error_px(&views[v], views[v].rays + 3 * r, fit);
-    qsort(sorted, total, sizeof *sorted, compare_doubles);
-    double threshold = fmax(min_px, 2.5 * sorted[total / 2]);
+    double threshold = fmax(min_px, 2.5 * order_kth_smallest(sorted, total, total / 2));
     /* the kept rays of each view, views with too few dropped */
     size_t used_views = 0, used_rays = 0;
     memcpy(was, in, total);

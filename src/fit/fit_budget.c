@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "order_statistics.h"
+#include "core/order_statistics.h"
 
 static size_t member(const fit_population *from, size_t i) {
   return from->index ? from->index[i] : i;
@@ -27,7 +27,7 @@ static cf_status importance_strata(const cf_observations *obs, const fit_populat
   for (size_t i = 0; i < n; ++i)
     score[i] = sorted[i] = cf_observation_specularity(obs, member(from, i));
   size_t top = n / 16 > 0 ? n / 16 : 1; /* the highlights: the `top` nearest */
-  double threshold = n ? fit_kth_smallest(sorted, n, n - top) : 0.0;
+  double threshold = n ? order_kth_smallest(sorted, n, n - top) : 0.0;
   for (size_t i = 0; i < n; ++i) {
     size_t k = member(from, i);
     const double *nrm = obs->normal + 3 * k, *v = obs->view + 3 * k;

@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lsq/parallel.h"
+#include "core/order_statistics.h"
 #include "fit_residuals.h"
 #include "fit_starts.h"
 #include "lsq/lsq.h"
-#include "order_statistics.h"
+#include "lsq/parallel.h"
 
 /* Every start runs to convergence (START_ITERATIONS at most) on a
  * subsample of about SUBSAMPLE_TARGET observations spread over the
@@ -52,7 +52,7 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
     }
     specularity[i] = sorted[i] = most;
   }
-  double threshold = fit_kth_smallest(sorted, n, n / 2); /* the median */
+  double threshold = order_kth_smallest(sorted, n, n / 2); /* the median */
   double num[3] = {0}, den[3] = {0};
   for (size_t i = 0; i < n; ++i) {
     if (specularity[i] > threshold) continue;

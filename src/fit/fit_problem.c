@@ -7,9 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/order_statistics.h"
 #include "lsq/lsq.h"
 #include "lsq/parallel.h"
-#include "order_statistics.h"
 
 enum { BLOCK_SIZE = 1024 };
 
@@ -51,7 +51,7 @@ cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from
   }
   for (size_t i = 0; i < n; ++i)
     score[i] = sorted[i] = cf_observation_specularity(obs, from->index ? from->index[i] : i);
-  double threshold = fit_kth_smallest(sorted, n, n - n / 16);
+  double threshold = order_kth_smallest(sorted, n, n - n / 16);
   size_t specular = 0;
   for (size_t i = 0; i < n; ++i) specular += score[i] >= threshold;
   /* per stratum: how many to take, every stride-th */

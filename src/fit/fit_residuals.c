@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/order_statistics.h"
 #include "fit_footprint.h"
 #include "fit_plan.h"
-#include "order_statistics.h"
 
 /* Per image, the observation with the brightest measurement (−1: none). */
 static cf_status brightest(const fit_problem *p, const double *measured, long **best,
@@ -126,8 +126,8 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   double median = 0.0;
   if (s == CF_OK && m > 0) {
     if (!p->sample_root)
-      median = fit_kth_smallest(prediction, m, m / 2);
-    else if (!fit_weighted_median(prediction, measured, m, &median))
+      median = order_kth_smallest(prediction, m, m / 2);
+    else if (!order_weighted_median(prediction, measured, m, &median))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
   if (s == CF_OK) *sigma = median > 0.0 ? 1.4826 * median : 1e-12;

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "clayfit/image.h"
+#include "core/order_statistics.h"
 #include "report_internal.h"
 
 enum { CROP_MARGIN = 8 };
@@ -25,22 +26,16 @@ void report_residual_colour(double r, float rgb[3]) {
   for (int c = 0; c < 3; ++c) rgb[c] = (float)((1.0 - a) * 1.0 + a * end[c]);
 }
 
-static int compare_float(const void *a, const void *b) {
-  float x = *(const float *)a, y = *(const float *)b;
-  return (x > y) - (x < y);
-}
-
 /* The display's white: the 99.5th percentile of the image's measured
  * values (over its observations and channels). */
 static double white_point(const report_data *d, size_t k) {
   size_t n = 3 * d->observations[k], m = 0;
-  float *values = n ? malloc(n * sizeof *values) : NULL;
+  double *values = n ? malloc(n * sizeof *values) : NULL;
   if (!values) return 1.0;
   for (size_t i = d->first[k]; i < d->last[k]; ++i)
     if (d->obs->image[i] == k)
       for (int c = 0; c < 3; ++c) values[m++] = (float)d->obs->rgb[3 * i + c];
-  qsort(values, m, sizeof *values, compare_float);
-  double white = m ? values[(size_t)(0.995 * (double)(m - 1))] : 1.0;
+  double white = m ? order_kth_smallest(values, m, (size_t)(0.995 * (double)(m - 1))) : 1.0;
   free(values);
   return white > 0.0 ? white : 1.0;
 }

@@ -15,7 +15,7 @@ CXXFLAGS := -std=c++17 $(COMMON)
 INSTRUMENT := -fsanitize=fuzzer-no-link $(SANITIZE)
 LIBS := -Wl,--as-needed -lOpenImageIO -lOpenImageIO_Util -ljansson -lm
 
-CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c
+CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c src/core/order_statistics.c
 MODEL := $(wildcard src/model/*.c)
 COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/colmap_binary.c \
           src/capture/colmap_text.c src/capture/colmap_read.c

@@ -1,9 +1,9 @@
 /* Order statistics (order_statistics.h). */
-#include "order_statistics.h"
+#include "core/order_statistics.h"
 
 #include <stdlib.h>
 
-double fit_kth_smallest(double *a, size_t n, size_t k) {
+double order_kth_smallest(double *a, size_t n, size_t k) {
   /* quickselect with a three-way partition: [lo, lt) < pivot,
    * [lt, gt] = pivot, (gt, hi] > pivot */
   ptrdiff_t lo = 0, hi = (ptrdiff_t)n - 1, target = (ptrdiff_t)k;
@@ -32,6 +32,15 @@ double fit_kth_smallest(double *a, size_t n, size_t k) {
   return a[target];
 }
 
+double order_median(double *a, size_t n) {
+  double upper = order_kth_smallest(a, n, n / 2);
+  if (n % 2) return upper;
+  double lower = a[0]; /* the largest of a[0..n/2), all <= upper after the selection */
+  for (size_t i = 1; i < n / 2; ++i)
+    if (a[i] > lower) lower = a[i];
+  return 0.5 * (lower + upper);
+}
+
 typedef struct weighted {
   double value, weight;
 } weighted;
@@ -41,7 +50,7 @@ static int by_value(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-int fit_weighted_median(const double *values, const double *weights, size_t n, double *median) {
+int order_weighted_median(const double *values, const double *weights, size_t n, double *median) {
   weighted *pairs = malloc((n ? n : 1) * sizeof *pairs);
   if (!pairs) return 0;
   double total = 0.0;
