@@ -25,6 +25,8 @@ import time
 
 import jsonschema
 
+from batch_captures import CAPTURES, SYNTH, make_captures
+
 CLAYFIT, SCHEMA, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 THREADS = "1"
 failures = 0
@@ -38,21 +40,6 @@ def check(ok, what):
 
 def run(*args, **kw):
     return subprocess.run([CLAYFIT, *args], capture_output=True, text=True, **kw)
-
-
-SYNTH = ["--images", "4", "--size", "96x72", "--format", "exr", "--no-noise",
-         "--supersample", "1"]
-# name: (synth model and params, manifest options, clayfit fit's flags)
-CAPTURES = {
-    "lambert": (["--model", "M0"], {}, []),
-    "oren": (["--model", "M1"], {"model": "M1"}, ["--model", "M1"]),
-    "glossy": (["--model", "M2", "--param", "roughness=0.3", "--param", "f0=0.05"],
-               {"model": "M2", "hold": {"f0": 0.05}}, ["--model", "M2", "--hold", "f0=0.05"]),
-    "exposed": (["--model", "M0", "--seed", "3"], {"model": "M0", "fit_exposures": True},
-                ["--model", "M0", "--fit-exposures"]),
-    "budget": (["--model", "M1", "--seed", "4"], {"budget": 2000}, ["--budget", "2000"]),
-    "broken": (["--model", "M0", "--seed", "5"], {}, []),
-}
 
 
 def synth(name, extra=()):
@@ -85,15 +72,7 @@ shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 MANIFEST = os.path.join(WORK, "manifest.json")
 LIBRARY = os.path.join(WORK, "library")
-for name in CAPTURES:
-    synth(name)
-images = os.path.join(WORK, "captures", "broken", "images")
-os.remove(os.path.join(images, sorted(os.listdir(images))[0]))
-manifest = {"clayfit_manifest": 1, "captures": [
-    {"name": n, "capture": f"captures/{n}/capture.json", "options": o,
-     "tags": {"body": "stoneware" if i % 2 else "porcelain", "index": str(i)}}
-    for i, (n, (_, o, _)) in enumerate(CAPTURES.items())]}
-json.dump(manifest, open(MANIFEST, "w"), indent=1)
+manifest = make_captures(run, WORK, MANIFEST)
 jsonschema.validate(manifest, json.load(open(os.path.join(SCHEMA, "manifest.schema.json"))))
 
 # ---- the first run: 5 fitted, 1 failed ----

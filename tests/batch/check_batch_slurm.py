@@ -28,6 +28,8 @@ import time
 
 import jsonschema
 
+from batch_captures import CAPTURES, make_captures
+
 CLAYFIT, SCHEMA, WORK = sys.argv[1], sys.argv[2], os.path.abspath(sys.argv[3])
 if not shutil.which("sbatch"):
     print("skipped: slurm-wlm is not installed (scripts/install-deps.sh)")
@@ -47,21 +49,6 @@ def check(ok, what):
 
 def run(*args, **kw):
     return subprocess.run([CLAYFIT, *args], capture_output=True, text=True, **kw)
-
-
-# As check_batch.py: name: (synth model and params, manifest options, clayfit fit's flags)
-SYNTH = ["--images", "4", "--size", "96x72", "--format", "exr", "--no-noise",
-         "--supersample", "1"]
-CAPTURES = {
-    "lambert": (["--model", "M0"], {}, []),
-    "oren": (["--model", "M1"], {"model": "M1"}, ["--model", "M1"]),
-    "glossy": (["--model", "M2", "--param", "roughness=0.3", "--param", "f0=0.05"],
-               {"model": "M2", "hold": {"f0": 0.05}}, ["--model", "M2", "--hold", "f0=0.05"]),
-    "exposed": (["--model", "M0", "--seed", "3"], {"model": "M0", "fit_exposures": True},
-                ["--model", "M0", "--fit-exposures"]),
-    "budget": (["--model", "M1", "--seed", "4"], {"budget": 2000}, ["--budget", "2000"]),
-    "broken": (["--model", "M0", "--seed", "5"], {}, []),
-}
 
 
 def synth(name, *extra):
@@ -108,15 +95,7 @@ os.makedirs(WORK)
 MANIFEST = os.path.join(WORK, "manifest.json")
 LIBRARY = os.path.join(WORK, "library x'y")
 LOCAL = os.path.join(WORK, "local")
-for name, (spec, _, _) in CAPTURES.items():
-    synth(name, *SYNTH, *spec)
-images = os.path.join(WORK, "captures", "broken", "images")
-os.remove(os.path.join(images, sorted(os.listdir(images))[0]))
-manifest = {"clayfit_manifest": 1, "captures": [
-    {"name": n, "capture": f"captures/{n}/capture.json", "options": o,
-     "tags": {"body": "stoneware" if i % 2 else "porcelain", "index": str(i)}}
-    for i, (n, (_, o, _)) in enumerate(CAPTURES.items())]}
-json.dump(manifest, open(MANIFEST, "w"), indent=1)
+manifest = make_captures(run, WORK, MANIFEST)
 
 # ---- through Slurm: 5 fitted, 1 failed ----
 r = slurm()
