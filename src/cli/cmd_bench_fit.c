@@ -28,6 +28,7 @@
 #include "cli.h"
 #include "core/clock.h"
 #include "core/file.h"
+#include "core/json_reader.h"
 #include "out_path.h"
 
 enum { MAX_CAPTURES = 8, MAX_BUDGETS = 8, MAX_RUNS = 256 };
@@ -391,10 +392,6 @@ static int run_all(bench_capture *captures, int count, const bench_args *a, cons
 
 /* ---- the figures ---- */
 
-static json_t *number_or_null(double x) {
-  return isfinite(x) ? json_real(x) : json_null();
-}
-
 /* The table of runs on stdout; their rows for the JSON file. */
 static json_t *print_runs(const run *runs, int n, const bench_capture *captures, int count) {
   printf("clayfit bench fit: %d captures, %d runs (each a process; wall time includes loading)\n",
@@ -420,7 +417,7 @@ static json_t *print_runs(const run *runs, int n, const bench_capture *captures,
                         bc->name, "model", cf_model_info_get(bc->model)->code, "observations",
                         (json_int_t)r->observations, "budget", (json_int_t)r->budget, "sampling",
                         sampling, "seconds", r->f.seconds, "peak_mb", r->peak_mb, "relative_rmse",
-                        r->f.relative_rmse, "worst_error", number_or_null(r->f.worst_error),
+                        r->f.relative_rmse, "worst_error", json_real_or_null(r->f.worst_error),
                         "solve_seconds", r->f.solve_seconds, "iterations", r->f.iterations,
                         "pareto", r->pareto));
   }
@@ -473,9 +470,9 @@ static json_t *print_scaling(const run *runs, int n) {
   double per_observation = bytes_per_observation(runs, n);
   printf("; memory per observation %.0f bytes (between the smallest and the largest capture)\n",
          per_observation);
-  return json_pack("{s:o, s:o, s:o}", "time_exponent", number_or_null(time_exponent),
-                   "memory_exponent", number_or_null(memory_exponent), "bytes_per_observation",
-                   number_or_null(per_observation));
+  return json_pack("{s:o, s:o, s:o}", "time_exponent", json_real_or_null(time_exponent),
+                   "memory_exponent", json_real_or_null(memory_exponent), "bytes_per_observation",
+                   json_real_or_null(per_observation));
 }
 
 int cmd_bench_fit(int argc, char **argv, cli_context *ctx) {

@@ -257,3 +257,7 @@ json_t *json_text(const char *text) {
   free(valid);
   return string;
 }
+
+json_t *json_real_or_null(double x) {
+  return isfinite(x) ? json_real(x) : json_null();
+}

@@ -25,6 +25,10 @@ cf_status json_write_file(const json_t *doc, const char *path, size_t flags, cf_
  * U+FFFD (text_escape_utf8). NULL text is "". NULL if out of memory. */
 json_t *json_text(const char *text);
 
+/* x as a JSON number, or null where it is not finite (JSON has no NaN or
+ * infinity: an undefined sd, an RMSE not computed). */
+json_t *json_real_or_null(double x);
+
 /* Where a value is: the file and its JSON path. Nodes chain on the stack. */
 typedef struct json_at {
   const char *file;

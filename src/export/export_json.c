@@ -17,16 +17,12 @@ static json_t *numbers(const double *x, int n) {
   return array;
 }
 
-static json_t *sd_number(double sd) {
-  return isfinite(sd) ? json_real(sd) : json_null();
-}
-
 static json_t *param_json(const cf_fit_result *r, const cf_param_info *info, int k) {
   json_t *value, *sd, *status;
   if (info->components == 3) {
     value = numbers(r->params + k, 3);
     sd = json_array();
-    for (int c = 0; c < 3; ++c) json_array_append_new(sd, sd_number(r->sd[k + c]));
+    for (int c = 0; c < 3; ++c) json_array_append_new(sd, json_real_or_null(r->sd[k + c]));
     int same = r->status[k] == r->status[k + 1] && r->status[k] == r->status[k + 2];
     if (same) {
       status = json_string(cf_param_status_name(r->status[k]));
@@ -37,7 +33,7 @@ static json_t *param_json(const cf_fit_result *r, const cf_param_info *info, int
     }
   } else {
     value = json_real(r->params[k]);
-    sd = sd_number(r->sd[k]);
+    sd = json_real_or_null(r->sd[k]);
     status = json_string(cf_param_status_name(r->status[k]));
   }
   return json_pack("{s:o, s:o, s:s, s:o, s:f, s:f, s:s}", "value", value, "sd", sd, "unit",

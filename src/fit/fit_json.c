@@ -21,15 +21,10 @@ static json_t *value_of(const double *x, int components) {
   return components == 3 ? numbers(x, 3) : json_real(x[0]);
 }
 
-/* A standard deviation: null where it is not defined (at a bound). */
-static json_t *sd_number(double sd) {
-  return isfinite(sd) ? json_real(sd) : json_null();
-}
-
 static json_t *sd_of(const double *sd, int components) {
-  if (components == 1) return sd_number(sd[0]);
+  if (components == 1) return json_real_or_null(sd[0]);
   json_t *array = json_array();
-  for (int c = 0; c < components; ++c) json_array_append_new(array, sd_number(sd[c]));
+  for (int c = 0; c < components; ++c) json_array_append_new(array, json_real_or_null(sd[c]));
   return array;
 }
 
@@ -132,10 +127,6 @@ static json_t *params_by_name(cf_model_id model, const double *x) {
   return out;
 }
 
-static json_t *number_or_null(double x) {
-  return isfinite(x) ? json_real(x) : json_null();
-}
-
 static const char *const loss_names[] = {"none", "huber", "cauchy"};
 
 /* The model choice: the rule, and every candidate's figures. */
@@ -157,8 +148,8 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
           "model", code, "ok", 1, "chosen", c->chosen, "params", params_json(&c->fit), "unknowns",
           c->parameters, "residuals", (json_int_t)c->residuals, "cost", c->cost, "bic", c->bic,
           "heldout_residuals", (json_int_t)c->heldout_residuals, "heldout_score",
-          number_or_null(c->heldout_score), "heldout_rmse", number_or_null(c->heldout_rmse),
-          "heldout_relative_rmse", number_or_null(c->heldout_relative_rmse), "train_rmse",
+          json_real_or_null(c->heldout_score), "heldout_rmse", json_real_or_null(c->heldout_rmse),
+          "heldout_relative_rmse", json_real_or_null(c->heldout_relative_rmse), "train_rmse",
           c->fit.rmse, "train_relative_rmse", c->fit.relative_rmse, "seconds", c->seconds, "note",
           c->note);
     }

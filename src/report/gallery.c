@@ -11,6 +11,7 @@
 
 #include "clayfit/model.h"
 #include "core/file.h"
+#include "core/json_reader.h"
 #include "core/text_escape.h"
 
 static const char *const state_names[] = {"fitted", "failed", "missing"};
@@ -78,18 +79,6 @@ static cf_status check_entry(const cf_gallery_entry *e, size_t i, cf_error *err)
 
 /* ---- the data the script sorts and filters on ---- */
 
-/* A JSON string of untrusted text (made valid UTF-8 for Jansson). */
-static json_t *json_text(const char *text) {
-  char *valid = text_escape_alloc(text_escape_utf8, text ? text : "");
-  json_t *s = valid ? json_string(valid) : NULL;
-  free(valid);
-  return s;
-}
-
-static json_t *json_number_or_null(double v) {
-  return isfinite(v) ? json_real(v) : json_null();
-}
-
 /* The sort key of each parameter component: "albedo" (an RGB parameter's
  * mean) and "albedo r", "albedo g", "albedo b". */
 static const char *const channel_suffix[3] = {" r", " g", " b"};
@@ -128,7 +117,7 @@ static int card_data(FILE *f, const cf_gallery_entry *e) {
     failed |= json_object_set_new(o, "name", json_text(e->name));
     failed |= json_object_set_new(o, "state", json_string(state_names[e->state]));
     failed |= json_object_set_new(o, "model", e->model ? json_text(e->model) : json_null());
-    failed |= json_object_set_new(o, "rmse", json_number_or_null(e->relative_rmse));
+    failed |= json_object_set_new(o, "rmse", json_real_or_null(e->relative_rmse));
     failed |= json_object_set_new(o, "reason", json_text(e->reason));
     for (size_t t = 0; !failed && t < e->tag_count; ++t) {
       char *key = text_escape_alloc(text_escape_utf8, e->tags[t].key);

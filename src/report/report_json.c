@@ -7,10 +7,6 @@
 #include "core/json_reader.h"
 #include "report_internal.h"
 
-static json_t *number_or_null(double x) {
-  return isfinite(x) ? json_real(x) : json_null();
-}
-
 static json_t *parameters_json(const cf_fit_result *r, json_t **unconstrained) {
   const cf_model_info *m = cf_model_info_get(r->model);
   json_t *list = json_array();
@@ -23,7 +19,7 @@ static json_t *parameters_json(const cf_fit_result *r, json_t **unconstrained) {
       cf_model_slot_name(r->model, k, name, sizeof name);
       json_array_append_new(
           list, json_pack("{s:s, s:f, s:o, s:s, s:s}", "name", name, "value", r->params[k], "sd",
-                          number_or_null(r->sd[k]), "unit", info->unit, "status",
+                          json_real_or_null(r->sd[k]), "unit", info->unit, "status",
                           cf_param_status_name(r->status[k])));
       if (r->status[k] == CF_PARAM_UNCONSTRAINED)
         json_array_append_new(*unconstrained, json_string(name));
@@ -56,8 +52,9 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
                   "residual", image_files[k][2], "observations", (json_int_t)d->observations[k],
                   "censored", (json_int_t)d->censored[k], "rejected", (json_int_t)d->rejected[k],
                   "not_radiance", (json_int_t)im->not_radiance, "rms_sigma", d->rms_sigma[k],
-                  "rmse", number_or_null(r->image_rmse ? r->image_rmse[k] : NAN), "relative_rmse",
-                  number_or_null(r->image_relative_rmse ? r->image_relative_rmse[k] : NAN)));
+                  "rmse", json_real_or_null(r->image_rmse ? r->image_rmse[k] : NAN),
+                  "relative_rmse",
+                  json_real_or_null(r->image_relative_rmse ? r->image_relative_rmse[k] : NAN)));
   }
   for (int p = 0; p < REPORT_PLOT_COUNT; ++p)
     json_object_set_new(plots, report_plots[p].key, json_string(report_plots[p].file));
