@@ -121,6 +121,7 @@ static void check_properties(const char *in, const char *label) {
   text_escape_utf8(out, sizeof out, in);
   CHECK(valid_utf8(out), "utf8 of %s", label);
   if (valid_utf8(in)) CHECK(strcmp(out, in) == 0, "utf8 changed the valid %s", label);
+  CHECK(text_is_utf8(in) == valid_utf8(in), "text_is_utf8 of %s", label);
 }
 
 static void exact_outputs(void) {

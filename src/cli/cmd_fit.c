@@ -64,8 +64,7 @@ static void fit_usage(FILE *out) {
           "  --max-iterations N  per solve (default 100)\n"
           "  --trace             every iteration of every solve on stderr, with the\n"
           "                      solver's decisions around it (to study convergence)\n"
-          "  --threads N         solver threads (default 2)\n"
-          CLI_IMAGE_MEMORY_USAGE);
+          "  --threads N         solver threads (default 2)\n" CLI_IMAGE_MEMORY_USAGE);
 }
 
 /* One --hold "name=value" (an RGB parameter: "r,g,b" or one number for
@@ -175,9 +174,9 @@ typedef struct fit_command {
   const char *capture_path, *out_dir, *model_text;
   const char *holds[MAX_ASSIGNMENTS], *frees[MAX_ASSIGNMENTS];
   int hold_count, free_count;
-  int trace; /* --trace: the solver's lines on stderr */
+  int trace;                          /* --trace: the solver's lines on stderr */
   unsigned long long max_image_bytes; /* --max-image-memory, 0: the default */
-  cf_fit_options set; /* the settings every model shares (cf_fit_model_options) */
+  cf_fit_options set;                 /* the settings every model shares (cf_fit_model_options) */
 } fit_command;
 
 static cf_status parse_loss(const char *text, cf_loss *loss, cf_error *err) {
@@ -372,8 +371,8 @@ static cf_status fit_options(const fit_command *cmd, int *automatic, cf_model_id
   }
   if (s == CF_OK) s = cf_model_find(cmd->model_text, model, err);
   if (s == CF_OK)
-    s = cf_fit_model_options(*model, &cmd->set, holds, cmd->hold_count, cmd->frees,
-                             cmd->free_count, NULL, &ladder[*model], err);
+    s = cf_fit_model_options(*model, &cmd->set, holds, cmd->hold_count, cmd->frees, cmd->free_count,
+                             NULL, &ladder[*model], err);
   if (s == CF_OK) s = cf_fit_check_options(&ladder[*model], err);
   return s;
 }
@@ -420,14 +419,16 @@ static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
  * UTF-8: a capture whose real path is not could not be recorded so that
  * report and export find it, so it is refused before the work. */
 static cf_status check_recordable(const char *capture_path, cf_error *err) {
-  char real[PATH_MAX], valid[PATH_MAX * 3 + 1];
+  char real[PATH_MAX];
   if (!realpath(capture_path, real)) return CF_OK; /* loading says why */
-  if (text_escape_utf8(valid, sizeof valid, real) == strlen(real) && strcmp(valid, real) == 0)
-    return CF_OK;
-  return cf_error_set(err, CF_EINVAL,
-                      "%s: the capture's path is not UTF-8 text, so fit.json could not record "
-                      "where the capture is (rename its folders or file)",
-                      valid);
+  if (text_is_utf8(real)) return CF_OK;
+  char *shown = text_escape_alloc(text_escape_utf8, real);
+  cf_status s = cf_error_set(err, CF_EINVAL,
+                             "%s: the capture's path is not UTF-8 text, so fit.json could not "
+                             "record where the capture is (rename its folders or file)",
+                             shown ? shown : capture_path);
+  free(shown);
+  return s;
 }
 
 int cmd_fit(int argc, char **argv, cli_context *ctx) {

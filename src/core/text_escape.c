@@ -247,6 +247,16 @@ size_t text_escape_utf8(char *out, size_t size, const char *text) {
 
 /* ---- conveniences ---- */
 
+int text_is_utf8(const char *text) {
+  unsigned cp;
+  for (const unsigned char *p = (const unsigned char *)(text ? text : ""); *p;) {
+    int n = utf8_decode(p, &cp);
+    if (n == 0) return 0;
+    p += n;
+  }
+  return 1;
+}
+
 char *text_escape_alloc(text_escape_fn escape_text, const char *text) {
   size_t length = escape_text(NULL, 0, text);
   char *out = malloc(length + 1);

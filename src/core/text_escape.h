@@ -60,6 +60,9 @@ size_t text_escape_xml_comment(char *out, size_t size, const char *text);
  * the rest as it is. */
 size_t text_escape_utf8(char *out, size_t size, const char *text);
 
+/* 1 if text is valid UTF-8, which text_escape_utf8 leaves as it is. */
+int text_is_utf8(const char *text);
+
 /* The escaped text in a new buffer (free() it); NULL if out of memory. */
 char *text_escape_alloc(text_escape_fn escape, const char *text);
 
