@@ -99,7 +99,7 @@ static void specular_inputs(const export_material *m, export_notes *n, blender_i
     set1(b, "Coat Weight", 0.0);
     return;
   }
-  double weight = 0.25 * m->coat_weight, r = sqrt(m->gtr1_a);
+  double weight = m->ggx_coat_weight, r = m->ggx_coat_roughness;
   set1(b, "Coat Weight", weight);
   set1(b, "Coat Roughness", r);
   set1(b, "Coat IOR", 1.5);

@@ -157,7 +157,7 @@ static json_t *material_json(const export_material *m, export_notes *n, json_t *
                 "glTF's fresnel_mix scales the diffuse by 1 - F(v.h) instead of "
                 "(1 - F(c_i))(1 - F(c_o))");
     if (m->model == CF_MODEL_CLEARCOAT) {
-      double weight = 0.25 * m->coat_weight, r = sqrt(m->gtr1_a);
+      double weight = m->ggx_coat_weight, r = m->ggx_coat_roughness;
       json_object_set_new(
           ext, "KHR_materials_clearcoat",
           json_pack("{s:f, s:f}", "clearcoatFactor", weight, "clearcoatRoughnessFactor", r));

@@ -80,8 +80,11 @@ typedef struct export_material {
   double albedo[3], sigma;
   /* M2, M3: the interface */
   double roughness, f0, ior;
-  /* M3: Burley's clear coat */
+  /* M3: Burley's clear coat, and the GGX coat of the renderers that have
+   * one: weight 0.25 coat_weight (Burley's 0.25), roughness sqrt(a), IOR 1.5
+   * (F0 0.04) */
   double coat_weight, coat_gloss, gtr1_a;
+  double ggx_coat_weight, ggx_coat_roughness;
   /* M4: the film and the base under it */
   double film_roughness, film_f0, film_ior, tau[3], transmittance[3];
   double base_roughness, base_f0, base_ior_rel, base_ior_abs;

@@ -152,6 +152,8 @@ void export_material_from_fit(const cf_fit_file *fit, export_material *m) {
     m->coat_weight = p[CF_CLEARCOAT_COAT_WEIGHT];
     m->coat_gloss = p[CF_CLEARCOAT_COAT_GLOSS];
     m->gtr1_a = export_gtr1_width(m->coat_gloss);
+    m->ggx_coat_weight = 0.25 * m->coat_weight;
+    m->ggx_coat_roughness = sqrt(m->gtr1_a);
   }
   if (m->model == CF_MODEL_CLAY) {
     m->film_roughness = p[CF_CLAY_FILM_ROUGHNESS];

@@ -111,7 +111,7 @@ static void standard_surface(const export_material *m, mtlx_shader *s, export_no
               "directional albedo instead of (1 - F(c_i))(1 - F(c_o))",
               m->f0, m->ior);
   if (m->model == CF_MODEL_CLEARCOAT) {
-    double weight = 0.25 * m->coat_weight, r = sqrt(m->gtr1_a);
+    double weight = m->ggx_coat_weight, r = m->ggx_coat_roughness;
     set1(s, "coat", weight);
     set1(s, "coat_roughness", r);
     set1(s, "coat_IOR", 1.5);
@@ -186,7 +186,7 @@ static void open_pbr_surface(const export_material *m, mtlx_shader *s, export_no
               "scaled by the lobe's directional albedo",
               m->f0, m->ior);
   if (m->model == CF_MODEL_CLEARCOAT) {
-    double weight = 0.25 * m->coat_weight, r = sqrt(m->gtr1_a);
+    double weight = m->ggx_coat_weight, r = m->ggx_coat_roughness;
     set1(s, "coat_weight", weight);
     set1(s, "coat_roughness", r);
     set1(s, "coat_ior", 1.5);
