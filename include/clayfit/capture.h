@@ -73,6 +73,8 @@ typedef struct cf_capture_image {
   size_t sphere_pixels; /* pixels whose centre sees the sphere, before the
                            silhouette margin and the mask */
   int lights;           /* lights of this image */
+  int jpeg;             /* 1: a JPEG file, whose lossy coding leaves errors correlated
+                           within its blocks (docs/model.md, the noise) */
 } cf_capture_image;
 
 /* Progress of a long load, for a progress line: stage is a short phrase
@@ -118,6 +120,15 @@ void cf_capture_files_free(char **files, size_t count);
 
 const cf_observations *cf_capture_observations(const cf_capture *capture);
 size_t cf_capture_image_count(const cf_capture *capture);
+/* The light that lights image `index` alone, for a gain per light (clayfit
+ * fit --fit-gains per-light): one id for the images one light lights (the
+ * capture file's only light, a flash, point or directional one or an
+ * environment, lights every image: id 0; a directional_per_image light is
+ * one light for the images whose rows give the same direction and
+ * intensity: the first such image's index), −1 when the capture has
+ * several lights (a gain per light would then sit inside each image's sum
+ * over them). */
+long cf_capture_image_light_id(const cf_capture *capture, size_t index);
 const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index);
 
 /* The geometry of a point of observation i's pixel footprint: the surface

@@ -22,6 +22,7 @@
 
 #include "clayfit/capture.h"
 #include "clayfit/model.h"
+#include "clayfit/response_model.h"
 #include "clayfit/status.h"
 
 #ifdef __cplusplus
@@ -60,6 +61,14 @@ typedef enum cf_param_status {
                                no standard deviation (NaN) */
 } cf_param_status;
 
+/* What cf_fit_options.fit_exposures frees (docs/fitting.md, Exposures):
+ * nothing, a gain per image (its exposure), or a gain per light, shared by
+ * the images one light lights alone (cf_capture_image_light_id; with a
+ * light per image, as in DiLiGenT, the same unknowns as per image), or an
+ * RGB gain per image (a white balance: the per-image gain, green's, and
+ * red's and blue's against it, each with its mean log over the images 0). */
+enum { CF_GAINS_NONE = 0, CF_GAINS_PER_IMAGE = 1, CF_GAINS_PER_LIGHT = 2, CF_GAINS_PER_IMAGE_RGB = 3 };
+
 typedef struct cf_fit_options {
   cf_model_id model;
   /* per slot: hold[k] = 1 holds params[k] at hold_value[k] (the user's
@@ -69,14 +78,16 @@ typedef struct cf_fit_options {
   int free[CF_MAX_DIM];
   cf_loss loss;
   double loss_scale;      /* in σ; default 3 */
-  int fit_exposures;      /* fit e_k per image (their mean log fixed at 0) */
+  int fit_exposures;      /* CF_GAINS_*: 0, or fit a gain e_k per image, or
+                             one per light (their mean log fixed at 0) */
   int multistart;         /* 1 (default): the deterministic multi-start */
   int use_start;          /* 1: start from `start` (and `start_scale`)
                              instead of the multi-start, for example from
                              the model choice's fit on a subsample */
   double start[CF_MAX_DIM];
   double start_scale;
-  double start_response;  /* γ to start from (0: 1), with use_start */
+  /* the response curve's slopes to start from (each 0: 1), with use_start */
+  double start_response[CF_RESPONSE_MODEL_KNOTS];
   int max_iterations;     /* per start; default 100 */
   int threads;            /* Ceres' threads; default 2 */
   const unsigned char *use_image; /* NULL: every image; else fit only the
@@ -191,13 +202,22 @@ typedef struct cf_fit_result {
   double correlation[CF_MAX_DIM * CF_MAX_DIM]; /* free_count² */
   double scale, scale_sd;    /* the global scale s (1 for absolute radiometry) */
   int scale_fitted;
-  /* the response exponent γ of photos whose tone curve the capture says is
-   * unknown: the prediction is (s e_k Σ f E c_i)^γ in the decoded values
-   * (1, not fitted, when the tone curve is known) */
-  double response, response_sd;
+  /* the camera response R of photos whose tone curve the capture says is
+   * unknown (clayfit/response_model.h): the prediction is R(s e_k Σ f E c_i)
+   * in the decoded values. Its slopes at the knots and their covariance
+   * (K × K, row-major; 0 where a slope ended at a bound); all slopes 1 and
+   * not fitted when the tone curve is known */
+  double response[CF_RESPONSE_MODEL_KNOTS];
+  double response_covariance[CF_RESPONSE_MODEL_KNOTS * CF_RESPONSE_MODEL_KNOTS];
   int response_fitted;
   size_t images;
   double *exposures;         /* e_k per image (1 unless fitted), owned */
+  double *exposure_sd;       /* their sd per image (0 unless fitted), owned */
+  /* the white balance b_kc per image and channel (3 × images; green's 1;
+   * red's and blue's 1 unless CF_GAINS_PER_IMAGE_RGB) and their sd: channel
+   * c of image k has the gain s e_k b_kc; owned, NULL in older files */
+  double *white_balance, *white_balance_sd;
+  int white_balance_fitted;
   double sigma;              /* σ when estimated from the residuals, else 0 */
 
   /* the pixel budget the fit used: sample_count observations drawn by
@@ -282,9 +302,12 @@ typedef struct cf_fit_candidate {
   cf_fit_result fit;       /* on the training part (owns its arrays) */
   int parameters;          /* k */
   size_t residuals;        /* n, training */
-  double cost, bic;        /* training, at the common σ */
+  double cost, bic;        /* training, at the common σ (with a fitted
+                              response and a noise model, each its own σ,
+                              the BIC with 2 Σ log σ: docs/model.md §6.8) */
   size_t heldout_residuals;
-  double heldout_score;    /* √(mean ρ(r²)), σ units */
+  double heldout_score;    /* √(mean ρ(r²)), σ units (with a fitted response
+                              and a noise model, times σ's geometric mean) */
   double heldout_rmse, heldout_relative_rmse; /* plain, radiance units */
   double seconds;
   int chosen;
@@ -318,6 +341,17 @@ void cf_fit_choice_free(cf_fit_choice *choice);
  * the value and the range), a start out of range, a footprint tolerance
  * outside (0, 1). CF_ERANGE or CF_EINVAL. */
 cf_status cf_fit_check_options(const cf_fit_options *options, cf_error *err);
+
+/* With options->fit_exposures, can the capture tell each image's gain
+ * from the material? At the base start (the closed-form albedo, the
+ * defaults) on the fit's sample, the normal equations of the options'
+ * model, the scale and the gains, with the material and the scale
+ * profiled out (a Schur complement): CF_EINVAL naming the images when
+ * that block is singular or a gain's predicted sd is above 10 %. CF_OK
+ * without fitted exposures. cf_fit_auto and cf_fit_run (without a start
+ * of their own) call it before any fit. */
+cf_status cf_fit_check_gains(const cf_capture *capture, const cf_fit_options *options,
+                             cf_error *err);
 
 /* Fit one model to a loaded capture. The result owns its per-image arrays
  * (cf_fit_result_free). */

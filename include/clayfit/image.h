@@ -84,9 +84,20 @@ cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_e
  * `info` where they are finite (format, bits_per_sample and is_float are
  * ignored; info may be NULL). JPEG and TIFF keep them in EXIF, OpenEXR
  * as attributes; other formats may drop them. For synthetic captures and
- * tests. */
+ * tests. OpenImageIO 2.4's EXIF rationals: an exposure time that is a
+ * power-of-two fraction (1/64 s, 0.5 s) comes back infinite and 1/50 s as
+ * 0.019999 s; 1/80, 1/125, 1/40 s come back exact. */
 cf_status cf_image_write_with_info(const char *path, const cf_image *image, int bits,
                                    const cf_image_info *info, cf_error *err);
+
+/* Chroma subsampling of a JPEG: full, half horizontally, half both ways. */
+typedef enum cf_chroma { CF_CHROMA_444, CF_CHROMA_422, CF_CHROMA_420 } cf_chroma;
+
+/* An 8-bit JPEG (.jpg/.jpeg) at libjpeg's quality 1..100 with that chroma
+ * subsampling (cameras write 4:2:0 at 85-95), and info's EXIF as
+ * cf_image_write_with_info. cf_image_write's JPEGs are quality 100, 4:4:4. */
+cf_status cf_image_write_jpeg(const char *path, const cf_image *image, int quality,
+                              cf_chroma chroma, const cf_image_info *info, cf_error *err);
 
 /* ---- colour decoding ---- */
 
@@ -98,6 +109,33 @@ typedef enum cf_transfer {
 
 double cf_srgb_to_linear(double encoded);
 double cf_linear_to_srgb(double linear);
+
+/* Camera response curves: linear exposure (1 = the curve's white) to a
+ * code in [0, 1], and back (src/capture/colour.c gives their sources).
+ * `synth --response` renders through them; tests take the truth from here.
+ *   linear    code = linear
+ *   srgb      code = cf_linear_to_srgb(linear)       (IEC 61966-2-1)
+ *   gamma2.2  code = linear^(1/2.2)
+ *   filmic    code = f(11.2 linear) / f(11.2), f Hable's "Uncharted 2"
+ *             filmic curve: a toe (slope 4.3 at 0, not sRGB's 12.92) and a
+ *             shoulder (slope 0.22 at 1); asymptote 1.29 above the white.
+ * All are odd-symmetric for negative values and strictly increasing;
+ * decode(encode(x)) = x to rounding (filmic's decode of a code at or above
+ * its asymptote is +inf). */
+typedef enum cf_response {
+  CF_RESPONSE_LINEAR,
+  CF_RESPONSE_SRGB,
+  CF_RESPONSE_GAMMA22,
+  CF_RESPONSE_FILMIC,
+  CF_RESPONSE_COUNT
+} cf_response;
+
+/* "linear", "srgb", "gamma2.2", "filmic" ("?" out of range). */
+const char *cf_response_name(cf_response response);
+/* The curve of that name; CF_EINVAL listing the names otherwise. */
+cf_status cf_response_find(const char *name, cf_response *response, cf_error *err);
+double cf_response_encode(cf_response response, double linear);
+double cf_response_decode(cf_response response, double code);
 
 /* How one image's stored values become linear radiance:
  *   clipped  <=> the stored value >= clip_level (in any channel; tested
@@ -115,7 +153,8 @@ typedef struct cf_decode {
 } cf_decode;
 
 /* Decode the first three channels of one stored pixel; returns the
- * per-channel clip mask (bit c set when channel c is clipped). A one- or
+ * per-channel clip mask (bit c set when channel c is clipped; a clipped
+ * channel is decoded at the clip level, which is all it says). A one- or
  * two-channel pixel (grey, grey + alpha) is read as grey: r = g = b from
  * channel 0, and when that is clipped all three bits are set. The transfer
  * is extended to negative stored values by odd symmetry (−f(−x)), so noise

@@ -24,8 +24,12 @@ extern "C" {
 typedef enum cf_synth_format {
   CF_SYNTH_PNG8,  /* 8-bit sRGB PNG: what a camera gives */
   CF_SYNTH_PNG16, /* 16-bit linear PNG */
-  CF_SYNTH_EXR    /* 32-bit float linear OpenEXR */
+  CF_SYNTH_EXR,   /* 32-bit float linear OpenEXR */
+  CF_SYNTH_JPEG   /* 8-bit JPEG (sRGB unless `response` says otherwise), 4:2:0 */
 } cf_synth_format;
+
+/* synth's default JPEG quality (libjpeg's 1..100 scale). */
+#define CF_SYNTH_JPEG_QUALITY 90
 
 /* With a reference card, the flash intensity the capture file gives is the
  * true one times this factor: only the card can set the scale right. */
@@ -45,6 +49,15 @@ typedef struct cf_synth_options {
   double shot_noise;         /* photon noise: variance per unit radiance (0 = none) */
   int supersample;           /* S: S×S samples per pixel near and on the sphere */
   cf_synth_format format;
+  int response;            /* the camera's response curve the photos are coded with: a
+                              cf_response (include/clayfit/image.h), or -1 for the
+                              format's own (png8, jpg: srgb; png16, exr: linear; exr takes
+                              no other) */
+  int jpeg_quality;        /* CF_SYNTH_JPEG: 1..100 */
+  int exif_exposures;      /* 1 (CF_SYNTH_JPEG only): each image gets its own exposure
+                              time, ISO and f-number in EXIF (a cycle of five settings,
+                              their exposures within a factor of 2), the photo is scaled
+                              by its exposure and the capture says "exposure": "exif" */
   int silhouette_geometry; /* 1: the capture file asks for the sphere from its
                               silhouettes instead of giving centre and radius */
   int write_masks;         /* 1: masks/ with the sphere's pixels */

@@ -33,8 +33,12 @@ cf_decode capture_image_decode(const cf_capture *capture, const cf_image_info *i
   d.gamma = spec->gamma;
   d.black_level = spec->black_level;
   /* by default the largest code of an integer image is clipped; a float
-   * image has no such level */
-  d.clip_level = isnan(spec->clip_level) ? (info->is_float ? INFINITY : 1.0) : spec->clip_level;
+   * image has no such level. A JPEG's coding spreads a clipped highlight's
+   * error to the codes just below the top (its blocks' ringing, 4:2:0
+   * chroma): CAPTURE_JPEG_CLIP_LEVEL counts them as clipped too. */
+  double integer_clip = strcmp(info->format, "jpeg") == 0 ? CAPTURE_JPEG_CLIP_LEVEL : 1.0;
+  d.clip_level =
+      isnan(spec->clip_level) ? (info->is_float ? INFINITY : integer_clip) : spec->clip_level;
   d.exposure = exposure;
   return d;
 }
@@ -175,4 +179,19 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
   summary->circle_axes_px[1] = capture->circle.b;
   summary->circle_angle = capture->circle.angle;
   summary->circle_source = capture->circle_source;
+}
+
+long cf_capture_image_light_id(const cf_capture *capture, size_t index) {
+  const cf_capture_spec *spec = &capture->spec;
+  if (spec->num_lights != 1 || index >= spec->num_images) return -1;
+  if (spec->lights[0].kind != CF_LIGHT_SPEC_PER_IMAGE) return 0;
+  size_t slots = (size_t)capture->max_lights;
+  const cf_light *mine = &capture->lights[index * slots];
+  for (size_t k = 0; k < index; ++k) { /* the first image with the same light */
+    const cf_light *other = &capture->lights[k * slots];
+    if (!memcmp(other->direction, mine->direction, sizeof mine->direction) &&
+        !memcmp(other->intensity, mine->intensity, sizeof mine->intensity))
+      return (long)k;
+  }
+  return (long)index;
 }

@@ -129,6 +129,7 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *
   if (s == CF_OK) {
     capture->raw_exposures[k] = exposure;
     capture->images[k].exposure = exposure;
+    capture->images[k].jpeg = strcmp(d->info.format, "jpeg") == 0;
     cf_decode decoding = capture_image_decode(capture, &d->info, exposure);
     s = capture_add_observations(capture, k, &d->image, mask, &decoding, err);
   }

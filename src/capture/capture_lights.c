@@ -89,7 +89,10 @@ static cf_status per_image_lights(cf_capture *capture, const cf_light_spec *spec
   double *intensities = malloc(3 * n * sizeof(double));
   cf_status s = directions && intensities ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) s = read_rows(spec_light->directions, &capture->spec, directions, err);
-  if (s == CF_OK) s = read_rows(spec_light->intensities, &capture->spec, intensities, err);
+  if (s == CF_OK && spec_light->intensities_equal)
+    for (size_t k = 0; k < 3 * n; ++k) intensities[k] = 1.0; /* unknown and equal */
+  else if (s == CF_OK)
+    s = read_rows(spec_light->intensities, &capture->spec, intensities, err);
   for (size_t k = 0; s == CF_OK && k < n; ++k) {
     double *d = directions + 3 * k, *e = intensities + 3 * k;
     /* scaled by its largest component first: the squares of 1e200 overflow

@@ -268,7 +268,8 @@ static cf_status read_radiometry_and_noise(const json_t *root, const json_at *at
                                            cf_capture_spec *spec, cf_error *err) {
   static const char *const radiometry[] = {"absolute", "relative", NULL};
   int relative = 0;
-  cf_status s = json_get_choice(root, at, "radiometry", 0, radiometry, &relative, NULL, err);
+  cf_status s = json_get_choice(root, at, "radiometry", 0, radiometry, &relative,
+                                &spec->radiometry_given, err);
   if (s != CF_OK) return s;
   spec->radiometry_relative = relative;
   const json_t *noise;
@@ -416,7 +417,18 @@ static cf_status read_light(const json_t *item, const json_at *at, cf_capture_sp
         return s;
       json_at d_at = json_member_at(at, "directions"), i_at = json_member_at(at, "intensities");
       if ((s = resolve(spec->dir, directions, &d_at, &light->directions, err)) != CF_OK) return s;
-      return resolve(spec->dir, intensities, &i_at, &light->intensities, err);
+      if (strcmp(intensities, "equal") != 0)
+        return resolve(spec->dir, intensities, &i_at, &light->intensities, err);
+      /* unknown and equal (a chrome ball gives directions only): 1 each, and
+       * the capture's lights known up to one common factor */
+      if (spec->radiometry_given && !spec->radiometry_relative)
+        return json_fail(&i_at, err, CF_EPARSE,
+                         "\"equal\" intensities are known only up to a common factor: the "
+                         "capture's radiometry must be \"relative\" (or left out), not "
+                         "\"absolute\"");
+      light->intensities_equal = 1;
+      spec->radiometry_relative = 1;
+      return CF_OK;
     }
     default: { /* environment */
       static const char *const keys[] = {"type", "file", "rotation", "scale", "count", NULL};

@@ -37,7 +37,10 @@ typedef struct cf_light_spec {
   int offset_in_metres;           /* flash: light.position is in metres; it
                                      becomes world units once the sphere's
                                      world radius is known */
-  char *directions, *intensities; /* PER_IMAGE: resolved paths */
+  char *directions, *intensities; /* PER_IMAGE: resolved paths; intensities
+                                     NULL when intensities_equal */
+  int intensities_equal;          /* PER_IMAGE: "intensities": "equal", unknown
+                                     and equal (1 each, radiometry relative) */
   char *file;                     /* ENVIRONMENT: resolved path */
   double rotation[9], scale;
   int count;
@@ -77,6 +80,7 @@ typedef struct cf_capture_spec {
   cf_exposure_kind exposure;
   int tone_curve_unknown;
   int radiometry_relative;
+  int radiometry_given; /* "radiometry" is in the file */
   int has_noise;
   double noise_read, noise_shot;
 

@@ -362,8 +362,16 @@ cf_status write_pfm(const char *path, const cf_image *image, cf_error *err) {
   return CF_OK;
 }
 
+/* How a JPEG is written: libjpeg's quality (1..100) and the chroma
+ * subsampling ("4:4:4", "4:2:2", "4:2:0"). */
+struct JpegSettings {
+  int quality;
+  const char *subsampling;
+};
+const JpegSettings kLosslessAsCanBe = {100, "4:4:4"};
+
 cf_status write_image(const char *path, const cf_image *image, int bits, const cf_image_info *info,
-                      cf_error *err) {
+                      const JpegSettings &jpeg, cf_error *err) {
   if (!image || !image->pixels || image->width <= 0 || image->height <= 0 || image->channels < 1 ||
       image->channels > 4)
     return cf_error_set(err, CF_EINVAL, "%s: nothing to write (an empty image)", path);
@@ -385,8 +393,8 @@ cf_status write_image(const char *path, const cf_image *image, int bits, const c
   if (kind == Kind::exr) spec.attribute("compression", "zip");
   if (kind == Kind::tiff) spec.attribute("compression", "zip");
   if (kind == Kind::jpeg) {
-    spec.attribute("Compression", "jpeg:100");
-    spec.attribute("jpeg:subsampling", "4:4:4");
+    spec.attribute("Compression", "jpeg:" + std::to_string(jpeg.quality));
+    spec.attribute("jpeg:subsampling", jpeg.subsampling);
   }
   if (info) {
     if (std::isfinite(info->exposure_time))
@@ -477,7 +485,28 @@ cf_status cf_image_write_with_info(const char *path, const cf_image *image, int 
                                    const cf_image_info *info, cf_error *err) {
   if (!path || !path[0]) return cf_error_set(err, CF_EINVAL, "an empty image path");
   try {
-    return write_image(path, image, bits, info, err);
+    return write_image(path, image, bits, info, kLosslessAsCanBe, err);
+  } catch (const std::exception &e) {
+    drain_errors();
+    return cf_error_set(err, CF_EIO, "%s: writing failed: %s", path, e.what());
+  } catch (...) {
+    return cf_error_set(err, CF_EIO, "%s: writing failed (an unknown exception)", path);
+  }
+}
+
+cf_status cf_image_write_jpeg(const char *path, const cf_image *image, int quality,
+                              cf_chroma chroma, const cf_image_info *info, cf_error *err) {
+  if (!path || !path[0]) return cf_error_set(err, CF_EINVAL, "an empty image path");
+  if (quality < 1 || quality > 100)
+    return cf_error_set(err, CF_EINVAL, "%s: JPEG quality %d is outside [1, 100]", path, quality);
+  std::string ext = extension_of(path);
+  if (kind_of(ext) != Kind::jpeg)
+    return cf_error_set(err, CF_EINVAL, "%s: a JPEG needs the extension .jpg or .jpeg", path);
+  const char *subsampling = chroma == CF_CHROMA_420   ? "4:2:0"
+                            : chroma == CF_CHROMA_422 ? "4:2:2"
+                                                      : "4:4:4";
+  try {
+    return write_image(path, image, 8, info, JpegSettings{quality, subsampling}, err);
   } catch (const std::exception &e) {
     drain_errors();
     return cf_error_set(err, CF_EIO, "%s: writing failed: %s", path, e.what());

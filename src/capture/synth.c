@@ -14,9 +14,9 @@
 #include "clayfit/colmap.h"
 #include "clayfit/image.h"
 #include "core/file.h"
+#include "core/json_reader.h"
 #include "core/rng.h"
 #include "synth_scene.h"
-#include "core/json_reader.h"
 
 #define SYNTH_PI 3.14159265358979323846
 
@@ -42,6 +42,8 @@ void cf_synth_default_options(cf_synth_options *o) {
   o->shot_noise = 0.0005;
   o->supersample = 3;
   o->format = CF_SYNTH_PNG8;
+  o->response = -1;
+  o->jpeg_quality = CF_SYNTH_JPEG_QUALITY;
   o->seed = 1;
   o->sphere_radius_m = 0.04;
 }
@@ -128,7 +130,10 @@ typedef struct render_job {
   cf_camera camera;
   synth_camera *cameras;
   double intensity;
-  int card_region[4]; /* the reference card's pixels in image 0 */
+  cf_response response;
+  double *exposures;   /* e_k per image (geometric mean 1) */
+  cf_image_info *exif; /* per image with exif_exposures, else NULL */
+  int card_region[4];  /* the reference card's pixels in image 0 */
   pthread_mutex_t lock;
   int next, done;
   cf_status status;
@@ -136,7 +141,44 @@ typedef struct render_job {
 } render_job;
 
 static const char *extension(cf_synth_format format) {
-  return format == CF_SYNTH_EXR ? "exr" : "png";
+  return format == CF_SYNTH_EXR ? "exr" : format == CF_SYNTH_JPEG ? "jpg" : "png";
+}
+
+/* The curve the photos are coded with. */
+static cf_response synth_response(const cf_synth_options *o) {
+  if (o->response >= 0) return (cf_response)o->response;
+  return o->format == CF_SYNTH_PNG8 || o->format == CF_SYNTH_JPEG ? CF_RESPONSE_SRGB
+                                                                  : CF_RESPONSE_LINEAR;
+}
+
+/* The EXIF settings exif_exposures cycles through: exposure time (s), ISO,
+ * f-number; exposure time x ISO / f-number^2 spans a factor of 1.95. The
+ * times are ones OpenImageIO 2.4's float-to-rational keeps exactly: it
+ * writes 1/50 s as 0.019999 s and 1/64 s or 0.5 s as infinity. */
+static const double exif_settings[][3] = {{1.0 / 80, 100, 4.0},
+                                          {1.0 / 125, 200, 4.0},
+                                          {1.0 / 40, 100, 4.5},
+                                          {1.0 / 160, 400, 5.6},
+                                          {1.0 / 125, 400, 7.1}};
+enum { EXIF_SETTINGS = sizeof exif_settings / sizeof exif_settings[0] };
+
+/* Each image's exposure e_k, and with exif_exposures its EXIF: the
+ * settings' exposure (as the file stores them: float) over their geometric
+ * mean, as the capture reads "exposure": "exif". */
+static void image_exposures(const cf_synth_options *o, double *exposures, cf_image_info *exif) {
+  double log_sum = 0.0;
+  for (int k = 0; k < o->images; ++k) {
+    exposures[k] = 1.0;
+    if (!exif) continue;
+    const double *setting = exif_settings[k % EXIF_SETTINGS];
+    memset(&exif[k], 0, sizeof exif[k]);
+    exif[k].exposure_time = (float)setting[0];
+    exif[k].iso = setting[1];
+    exif[k].f_number = (float)setting[2];
+    exposures[k] = exif[k].exposure_time * exif[k].iso / (exif[k].f_number * exif[k].f_number);
+    log_sum += log(exposures[k]);
+  }
+  for (int k = 0; exif && k < o->images; ++k) exposures[k] /= exp(log_sum / o->images);
 }
 
 /* The scene as camera cam sees it, lit by its flash. */
@@ -203,19 +245,29 @@ static double gaussian(cf_rng *rng) {
   return sqrt(-2.0 * log(1.0 - u1)) * cos(2.0 * SYNTH_PI * u2);
 }
 
-/* Photon and read noise, then what the file stores. */
-static float stored_value(const cf_synth_options *o, double radiance, cf_rng *rng) {
+/* Photon and read noise, then what the file stores: the noise is added in
+ * radiance units (so the capture's noise block holds after decoding), then
+ * the image's exposure, and for integer formats the clip to [0, 1] and the
+ * response curve (the writer rounds). */
+static float stored_value(const render_job *job, double exposure, double radiance, cf_rng *rng) {
+  const cf_synth_options *o = job->options;
   double variance = o->shot_noise * fmax(radiance, 0.0) + o->read_noise * o->read_noise;
   double noisy = radiance + (variance > 0.0 ? sqrt(variance) * gaussian(rng) : 0.0);
-  switch (o->format) {
-    case CF_SYNTH_PNG8:
-      return (float)cf_linear_to_srgb(fmin(1.0, fmax(0.0, noisy)));
-    case CF_SYNTH_PNG16:
-      return (float)fmin(1.0, fmax(0.0, noisy));
-    case CF_SYNTH_EXR:
-      return (float)noisy;
-  }
-  return 0.0f;
+  noisy *= exposure;
+  if (o->format == CF_SYNTH_EXR) return (float)noisy;
+  return (float)cf_response_encode(job->response, fmin(1.0, fmax(0.0, noisy)));
+}
+
+/* Image k into its file: JPEG at the options' quality with 4:2:0 chroma
+ * (as cameras write it) and its EXIF, the other formats as they are. */
+static cf_status write_photo(const render_job *job, int k, const char *path, const cf_image *image,
+                             cf_error *err) {
+  const cf_synth_options *o = job->options;
+  if (o->format == CF_SYNTH_JPEG)
+    return cf_image_write_jpeg(path, image, o->jpeg_quality, CF_CHROMA_420,
+                               job->exif ? &job->exif[k] : NULL, err);
+  int bits = o->format == CF_SYNTH_PNG8 ? 8 : o->format == CF_SYNTH_PNG16 ? 16 : 32;
+  return cf_image_write(path, image, bits, err);
 }
 
 static cf_status render_image(render_job *job, int k, cf_error *err) {
@@ -232,15 +284,15 @@ static cf_status render_image(render_job *job, int k, cf_error *err) {
       double radiance[3], covered;
       render_pixel(job, &scene, cam, x, y, radiance, &covered);
       float *pixel = image.pixels + 3 * ((size_t)y * (size_t)o->width + (size_t)x);
-      for (int c = 0; c < 3; ++c) pixel[c] = stored_value(o, radiance[c], &rng);
+      for (int c = 0; c < 3; ++c)
+        pixel[c] = stored_value(job, job->exposures[k], radiance[c], &rng);
       if (mask.pixels) mask.pixels[(size_t)y * (size_t)o->width + (size_t)x] = covered == 1.0;
     }
   }
   char name[64], path[4096];
   snprintf(name, sizeof name, "images/%03d.%s", k, extension(o->format));
   if (s == CF_OK) s = cf_path_join(job->dir, name, path, sizeof path, err);
-  int bits = o->format == CF_SYNTH_PNG8 ? 8 : o->format == CF_SYNTH_PNG16 ? 16 : 32;
-  if (s == CF_OK) s = cf_image_write(path, &image, bits, err);
+  if (s == CF_OK) s = write_photo(job, k, path, &image, err);
   /* a mask has its image's file name (the capture format looks it up so) */
   snprintf(name, sizeof name, "masks/%03d.%s", k, extension(o->format));
   if (s == CF_OK && mask.pixels) s = cf_path_join(job->dir, name, path, sizeof path, err);
@@ -399,11 +451,14 @@ static cf_status write_capture_file(const char *dir, const render_job *job, cf_e
   }
   json_t *images = json_pack("{s:s, s:o}", "directory", "images", "files", files);
   if (o->write_masks) json_object_set_new(images, "masks", json_string("masks"));
+  /* JPEG's 4:2:0 chroma carries the background about 3 pixels into the
+   * sphere (the upsampling's reach): 2 more pixels of margin */
+  const double margin = o->format == CF_SYNTH_JPEG ? 4.0 : 2.0;
   json_t *geometry =
       o->silhouette_geometry
-          ? json_pack("{s:s, s:f}", "type", "sphere_from_silhouettes", "margin_px", 2.0)
+          ? json_pack("{s:s, s:f}", "type", "sphere_from_silhouettes", "margin_px", margin)
           : json_pack("{s:s, s:[f, f, f], s:f, s:f}", "type", "sphere", "center", 0.0, 0.0, 0.0,
-                      "radius", 1.0, "margin_px", 2.0);
+                      "radius", 1.0, "margin_px", margin);
   /* with a reference card, the lights are given wrong by a known factor */
   const int reference = o->reference_albedo > 0.0;
   const double intensity = reference ? CF_SYNTH_REFERENCE_FACTOR * job->intensity : job->intensity;
@@ -412,12 +467,16 @@ static cf_status write_capture_file(const char *dir, const render_job *job, cf_e
                             rgb_json(intensity, intensity, intensity));
   char name[128];
   snprintf(name, sizeof name, "synthetic %s (%s), %d images", m->name, m->code, o->images);
-  json_t *doc = json_pack("{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:o, s:{s:f}, s:[o]}",
-                          "clayfit_capture", 1, "name", name, "camera", "type", "colmap", "model",
-                          "sparse/0", "images", images, "colour", "encoding",
-                          o->format == CF_SYNTH_PNG8 ? "srgb" : "linear", "radiometry",
-                          reference ? "relative" : "absolute", "geometry", geometry, "scale",
-                          "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+  json_t *doc = json_pack(
+      "{s:i, s:s, s:{s:s, s:s}, s:o, s:{s:s}, s:s, s:o, s:{s:f}, s:[o]}", "clayfit_capture", 1,
+      "name", name, "camera", "type", "colmap", "model", "sparse/0", "images", images, "colour",
+      "encoding", o->format == CF_SYNTH_PNG8 || o->format == CF_SYNTH_JPEG ? "srgb" : "linear",
+      "radiometry", reference ? "relative" : "absolute", "geometry", geometry, "scale",
+      "sphere_radius_m", o->sphere_radius_m, "lights", flash);
+  /* the colour block declares the format's own encoding whatever the
+   * response (truth.json has the true curve: a test declares it, or not) */
+  if (o->exif_exposures)
+    json_object_set_new(json_object_get(doc, "colour"), "exposure", json_string("exif"));
   /* the noise model, when there is noise (without one the fit estimates σ
    * from its residuals) */
   if (o->read_noise > 0.0 || o->shot_noise > 0.0)
@@ -446,7 +505,7 @@ static cf_status write_truth(const char *dir, const render_job *job, cf_error *e
     json_object_set_new(params, p->name,
                         p->components == 3 ? rgb_json(x[0], x[1], x[2]) : json_real(x[0]));
   }
-  static const char *const formats[] = {"png8", "png16", "exr"};
+  static const char *const formats[] = {"png8", "png16", "exr", "jpg"};
   json_t *doc = json_pack(
       "{s:s, s:s, s:o, s:{s:[f, f, f], s:f}, s:{s:[f, f, f], s:f}, s:f, s:i, s:s, s:{s:f, "
       "s:f}, s:I, s:i, s:i, s:f, s:f}",
@@ -456,6 +515,16 @@ static cf_status write_truth(const char *dir, const render_job *job, cf_error *e
       formats[o->format], "noise", "read", o->read_noise, "shot", o->shot_noise, "seed",
       (json_int_t)o->seed, "width", o->width, "height", o->height, "focal_px", o->focal_px,
       "distance", o->distance);
+  json_object_set_new(doc, "response", json_string(cf_response_name(job->response)));
+  if (o->format == CF_SYNTH_JPEG)
+    json_object_set_new(
+        doc, "jpeg", json_pack("{s:i, s:s}", "quality", o->jpeg_quality, "subsampling", "4:2:0"));
+  if (job->exif) {
+    json_t *exposures = json_array();
+    for (int k = 0; k < o->images; ++k)
+      json_array_append_new(exposures, json_real(job->exposures[k]));
+    json_object_set_new(doc, "exposures", exposures);
+  }
   if (o->reference_albedo > 0.0)
     json_object_set_new(
         doc, "reference",
@@ -484,6 +553,16 @@ static cf_status check_options(const cf_synth_options *o, cf_error *err) {
   if (!(o->read_noise >= 0.0) || !(o->shot_noise >= 0.0) || !(o->flash_intensity >= 0.0) ||
       !isfinite(o->read_noise + o->shot_noise + o->flash_intensity))
     return cf_error_set(err, CF_ERANGE, "noise and flash intensity must be finite and >= 0");
+  if (o->response < -1 || o->response >= CF_RESPONSE_COUNT)
+    return cf_error_set(err, CF_EINVAL, "response: %d is not a response curve", o->response);
+  if (o->format == CF_SYNTH_EXR && o->response > CF_RESPONSE_LINEAR)
+    return cf_error_set(err, CF_EINVAL,
+                        "response %s: exr stores linear floats; use png8, png16 or jpg",
+                        cf_response_name((cf_response)o->response));
+  if (o->format == CF_SYNTH_JPEG && (o->jpeg_quality < 1 || o->jpeg_quality > 100))
+    return cf_error_set(err, CF_ERANGE, "JPEG quality: %d is outside [1, 100]", o->jpeg_quality);
+  if (o->exif_exposures && o->format != CF_SYNTH_JPEG)
+    return cf_error_set(err, CF_EINVAL, "EXIF exposures need the jpg format (PNG keeps no EXIF)");
   if (!(o->reference_albedo >= 0.0 && o->reference_albedo <= 1.0))
     return cf_error_set(err, CF_ERANGE, "reference albedo: %g is outside (0, 1] (0: no card)",
                         o->reference_albedo);
@@ -509,11 +588,21 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
    * radiance 0.5: I/(π D²) = 0.5 */
   job.intensity =
       o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * SYNTH_PI * o->distance * o->distance;
+  job.response = synth_response(o);
   job.cameras = calloc((size_t)o->images, sizeof *job.cameras);
-  if (!job.cameras) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (int k = 0; k < o->images; ++k) orbit_camera(o, k, &job.cameras[k]);
-  if (o->reference_albedo > 0.0 && (s = card_region(&job, job.card_region, err)) != CF_OK) {
+  job.exposures = calloc((size_t)o->images, sizeof *job.exposures);
+  if (o->exif_exposures) job.exif = calloc((size_t)o->images, sizeof *job.exif);
+  if (!job.cameras || !job.exposures || (o->exif_exposures && !job.exif))
+    s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) {
+    image_exposures(o, job.exposures, job.exif);
+    for (int k = 0; k < o->images; ++k) orbit_camera(o, k, &job.cameras[k]);
+  }
+  if (s == CF_OK && o->reference_albedo > 0.0) s = card_region(&job, job.card_region, err);
+  if (s != CF_OK) {
     free(job.cameras);
+    free(job.exposures);
+    free(job.exif);
     return s;
   }
   pthread_mutex_init(&job.lock, NULL);
@@ -531,5 +620,7 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
   if (s == CF_OK) s = write_capture_file(dir, &job, err);
   if (s == CF_OK) s = write_truth(dir, &job, err);
   free(job.cameras);
+  free(job.exposures);
+  free(job.exif);
   return s;
 }

@@ -25,6 +25,10 @@ int cmd_report(int argc, char **argv, cli_context *ctx);
 int cmd_export(int argc, char **argv, cli_context *ctx);
 int cmd_batch(int argc, char **argv, cli_context *ctx);
 int cmd_library(int argc, char **argv, cli_context *ctx); /* clayfit library compare */
+int cmd_lights(int argc, char **argv, cli_context *ctx);  /* clayfit lights (chrome ball) */
+/* clayfit lights --probe (cmd_lights_probe.c), called by cmd_lights when
+ * --probe is among its arguments; argv[0] is "lights". */
+int cli_lights_probe(int argc, char **argv);
 
 /* A progress line on stderr ("clayfit synth: rendering images 5/16"),
  * rewritten in place; user is the command's name. Ends the line when

@@ -24,7 +24,8 @@ static void fit_usage(FILE *out) {
   fprintf(out,
           "usage: clayfit fit CAPTURE -o OUTDIR [--model auto|M] [--hold name=value ...]\n"
           "                   [--free name ...] [--loss huber|cauchy|none] [--loss-scale K]\n"
-          "                   [--fit-exposures] [--no-multistart] [--density D]\n"
+          "                   [--fit-exposures | --fit-gains per-image|per-light|per-image-rgb]\n"
+          "                   [--no-multistart] [--density D]\n"
           "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
           "                   [--budget N|all] [--sampling uniform|stratified|importance]\n"
           "                   [--max-iterations N] [--threads N] [--trace]\n\n"
@@ -42,7 +43,14 @@ static void fit_usage(FILE *out) {
           "                      sets the scale of a capture with relative radiometry)\n"
           "  --loss L            robust loss in units of the noise (default huber)\n"
           "  --loss-scale K      where it starts, in noise sigmas (default 3)\n"
-          "  --fit-exposures     fit each image's exposure (their mean log stays 0)\n"
+          "  --fit-exposures     fit each image's exposure, a gain per photo (their mean log\n"
+          "                      stays 0; refused, exit 2, when the capture cannot tell a\n"
+          "                      gain from the material); the same as --fit-gains per-image\n"
+          "  --fit-gains G       none, per-image, per-light: a gain per light, shared by the\n"
+          "                      images one light lights (a directional_per_image light is\n"
+          "                      one light for the images whose rows are the same), or\n"
+          "                      per-image-rgb: a gain per image and channel (a white\n"
+          "                      balance, for lights of different colours)\n"
           "  --no-multistart     start from the closed-form albedo and defaults only\n"
           "  --density D         the film's known thickness, for density and absorption\n"
           "                      (default: mean absorption 0.8, docs/model.md §3.6)\n"
@@ -137,7 +145,33 @@ static void print_params(const cf_fit_result *r) {
   }
 }
 
-static void print_summary(const cf_fit_result *r, const char *path) {
+/* The fitted per-image gains e_k ± sd, four to a line. */
+static void print_gains(const cf_fit_result *r, const cf_capture *capture) {
+  if (!r->exposure_sd || r->images < 2) return;
+  double low = HUGE_VAL, high = 0.0, worst = 0.0;
+  for (size_t k = 0; k < r->images; ++k) {
+    low = fmin(low, r->exposures[k]);
+    high = fmax(high, r->exposures[k]);
+    worst = fmax(worst, r->exposure_sd[k] / r->exposures[k]);
+  }
+  if (!(worst > 0.0)) return; /* not fitted */
+  printf("  gain per image (e_k ± sd, their mean log 0): %.4g to %.4g, sd at most %.2g %%\n", low,
+         high, 100.0 * worst);
+  for (size_t k = 0; k < r->images; ++k)
+    printf("%s%-12.12s %.4f ± %.4f%s", k % 4 ? "  " : "    ",
+           cf_capture_image_at(capture, k)->name, r->exposures[k], r->exposure_sd[k],
+           k % 4 == 3 || k + 1 == r->images ? "\n" : "");
+  if (!r->white_balance_fitted || !r->white_balance || !r->white_balance_sd) return;
+  printf("  white balance per image (red and blue against green, each's mean log 0):\n");
+  for (size_t k = 0; k < r->images; ++k) {
+    const double *b = r->white_balance + 3 * k, *sd = r->white_balance_sd + 3 * k;
+    printf("%s%-12.12s %.4f ± %.4f %.4f ± %.4f%s", k % 2 ? "  " : "    ",
+           cf_capture_image_at(capture, k)->name, b[0], sd[0], b[2], sd[2],
+           k % 2 == 1 || k + 1 == r->images ? "\n" : "");
+  }
+}
+
+static void print_summary(const cf_fit_result *r, const cf_capture *capture, const char *path) {
   const cf_model_info *m = cf_model_info_get(r->model);
   printf(
       "model %s (%s): relative RMSE %.4g %% over %zu residuals (%zu censored, %zu beyond "
@@ -160,11 +194,18 @@ static void print_summary(const cf_fit_result *r, const char *path) {
     print_value(r->scale, r->scale_sd, 0, 0.0, 0.0);
     printf("\n");
   }
-  if (r->response_fitted) {
-    printf("  %-18s", "response exponent");
-    print_value(r->response, r->response_sd, 0, 0.0, 0.0);
-    printf("  (the photos' unknown tone curve)\n");
+  if (r->response_fitted) { /* the slopes d log R / d log x at the knots */
+    for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) {
+      char name[32];
+      snprintf(name, sizeof name, "response @ 1/%g", 1.0 / cf_response_model_knot(j));
+      printf("  %-18s", j == 0 ? "response @ 1" : name);
+      print_value(r->response[j],
+                  sqrt(fmax(0.0, r->response_covariance[j * (CF_RESPONSE_MODEL_KNOTS + 1)])), 0,
+                  0.0, 0.0);
+      printf("%s\n", j == 0 ? "  (log-log slopes of the photos' unknown tone curve)" : "");
+    }
   }
+  print_gains(r, capture);
   printf("written: %s\n", path);
 }
 
@@ -286,6 +327,7 @@ static const struct option fit_long_options[] = {
     {"loss", required_argument, NULL, 'l'},
     {"loss-scale", required_argument, NULL, 'k'},
     {"fit-exposures", no_argument, NULL, 'e'},
+    {"fit-gains", required_argument, NULL, 'g'},
     {"no-multistart", no_argument, NULL, 'M'},
     {"density", required_argument, NULL, 'd'},
     {"max-iterations", required_argument, NULL, 'i'},
@@ -321,7 +363,20 @@ static int parse_command(int argc, char **argv, fit_command *cmd, cf_status *s, 
       }
       (c == 'H' ? cmd->holds : cmd->frees)[(*count)++] = optarg;
     } else if (c == 'e') {
-      cmd->set.fit_exposures = 1;
+      cmd->set.fit_exposures = CF_GAINS_PER_IMAGE;
+    } else if (c == 'g') {
+      if (!strcmp(optarg, "per-image"))
+        cmd->set.fit_exposures = CF_GAINS_PER_IMAGE;
+      else if (!strcmp(optarg, "per-light"))
+        cmd->set.fit_exposures = CF_GAINS_PER_LIGHT;
+      else if (!strcmp(optarg, "per-image-rgb"))
+        cmd->set.fit_exposures = CF_GAINS_PER_IMAGE_RGB;
+      else if (strcmp(optarg, "none"))
+        *s = cf_error_set(err, CF_EINVAL,
+                          "--fit-gains: '%s' is not none, per-image, per-light or per-image-rgb",
+                          optarg);
+      else
+        cmd->set.fit_exposures = CF_GAINS_NONE;
     } else if (c == 'M') {
       cmd->set.multistart = 0;
     } else if (c == 'R') {
@@ -410,7 +465,7 @@ static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
   for (int i = 0; i < result->warning_count && !ctx->quiet; ++i)
     fprintf(stderr, "clayfit fit: warning: %s\n", result->warnings[i]);
   if (choice) print_choice(choice);
-  print_summary(result, path);
+  print_summary(result, capture, path);
   return CF_OK;
 }
 

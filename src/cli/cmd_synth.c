@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "args.h"
+#include "clayfit/image.h"
 #include "clayfit/synth.h"
 #include "cli.h"
 #include "out_path.h"
@@ -11,7 +12,8 @@
 static void synth_usage(FILE *out) {
   fprintf(out,
           "usage: clayfit synth -o DIR [--model M] [--param name=value ...] [--images N]\n"
-          "                     [--size WxH] [--format png8|png16|exr] [--supersample S]\n"
+          "                     [--size WxH] [--format png8|png16|exr|jpg] [--quality Q]\n"
+          "                     [--response NAME] [--exif-exposures] [--supersample S]\n"
           "                     [--read-noise SIGMA] [--shot-noise K] [--no-noise]\n"
           "                     [--flash-intensity I] [--silhouettes] [--masks] [--seed N]\n"
           "                     [--reference ALBEDO]\n\n"
@@ -22,7 +24,15 @@ static void synth_usage(FILE *out) {
           "the true COLMAP model DIR/sparse/0/ (text), DIR/capture.json and DIR/truth.json.\n\n"
           "  --model M          material model (default clay), --param as in clayfit eval\n"
           "  --images N         cameras (default 16)        --size WxH (default 640x480)\n"
-          "  --format F         png8: 8-bit sRGB (default); png16: 16-bit linear; exr: float\n"
+          "  --format F         png8: 8-bit sRGB (default); png16: 16-bit linear; exr: float;\n"
+          "                     jpg: 8-bit sRGB JPEG, 4:2:0 chroma\n"
+          "  --quality Q        JPEG quality 1..100 (default 90)\n"
+          "  --response NAME    code the photos with this camera curve: linear, srgb,\n"
+          "                     gamma2.2 or filmic (Hable's; default: the format's own,\n"
+          "                     srgb for png8 and jpg, linear for png16). The capture file\n"
+          "                     still declares the format's own; truth.json has the curve\n"
+          "  --exif-exposures   (jpg) per-image exposure time, ISO and f-number in EXIF,\n"
+          "                     the photos scaled to match; the capture says exposure exif\n"
           "  --supersample S    samples per pixel side (default 3)\n"
           "  --read-noise SIGMA read noise, radiance units (default 0.002)\n"
           "  --shot-noise K     photon-noise variance per unit radiance (default 0.0005)\n"
@@ -59,8 +69,10 @@ static cf_status parse_format(const char *text, cf_synth_format *format, cf_erro
     *format = CF_SYNTH_PNG16;
   else if (strcmp(text, "exr") == 0)
     *format = CF_SYNTH_EXR;
+  else if (strcmp(text, "jpg") == 0)
+    *format = CF_SYNTH_JPEG;
   else
-    return cf_error_set(err, CF_EINVAL, "--format: '%s' is not png8, png16 or exr", text);
+    return cf_error_set(err, CF_EINVAL, "--format: '%s' is not png8, png16, exr or jpg", text);
   return CF_OK;
 }
 
@@ -77,6 +89,18 @@ static cf_status parse_setting(int c, const char *arg, cf_synth_options *o, cf_e
       return parse_size(arg, o, err);
     case 'f':
       return parse_format(arg, &o->format, err);
+    case 'q':
+      s = cli_parse_count(arg, "--quality", 1, 100, &count, err);
+      o->jpeg_quality = (int)count;
+      return s;
+    case 'c': {
+      cf_response response = CF_RESPONSE_LINEAR;
+      cf_error why = {0};
+      if (cf_response_find(arg, &response, &why) != CF_OK)
+        return cf_error_set(err, CF_EINVAL, "--response: %s", why.message);
+      o->response = (int)response;
+      return CF_OK;
+    }
     case 'S':
       s = cli_parse_count(arg, "--supersample", 1, 16, &count, err);
       o->supersample = (int)count;
@@ -118,6 +142,9 @@ static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_optio
                                           {"images", required_argument, NULL, 'n'},
                                           {"size", required_argument, NULL, 's'},
                                           {"format", required_argument, NULL, 'f'},
+                                          {"quality", required_argument, NULL, 'q'},
+                                          {"response", required_argument, NULL, 'c'},
+                                          {"exif-exposures", no_argument, NULL, 'x'},
                                           {"supersample", required_argument, NULL, 'S'},
                                           {"read-noise", required_argument, NULL, 'r'},
                                           {"shot-noise", required_argument, NULL, 'k'},
@@ -150,6 +177,8 @@ static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_optio
       o->silhouette_geometry = 1;
     } else if (c == 'M') {
       o->write_masks = 1;
+    } else if (c == 'x') {
+      o->exif_exposures = 1;
     } else if (c == 'h') {
       synth_usage(stdout);
       return CLI_EXIT_OK;

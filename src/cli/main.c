@@ -17,6 +17,7 @@ static const command commands[] = {
     {"eval", cmd_eval, "evaluate the BRDF (and its gradient) for one set of directions"},
     {"models", cmd_models, "list the model ladder and every parameter's unit and range"},
     {"synth", cmd_synth, "render a synthetic capture with known parameters"},
+    {"lights", cmd_lights, "light directions (or a light probe) from photos of a chrome ball"},
     {"inspect", cmd_inspect, "load a capture, summarise it, draw the pixels it uses"},
     {"fit", cmd_fit, "fit a model to a capture: parameters, uncertainty, fit.json"},
     {"export", cmd_export, "a fit's material as a preset: json, MaterialX, glTF, Blender, Mitsuba"},

@@ -41,6 +41,17 @@ static json_t *param_json(const cf_fit_result *r, const cf_param_info *info, int
                    "meaning", info->meaning);
 }
 
+/* The fit's response curve: its model's name, slopes and their sds
+ * (clayfit/response_model.h). */
+static json_t *response_json(const cf_fit_result *r) {
+  enum { K = CF_RESPONSE_MODEL_KNOTS };
+  double sd[K];
+  for (int j = 0; j < K; ++j) sd[j] = sqrt(fmax(0.0, r->response_covariance[j * (K + 1)]));
+  return json_pack("{s:s, s:o, s:o, s:b}", "model", CF_RESPONSE_MODEL_NAME, "slopes",
+                   numbers(r->response, K), "slopes_sd", numbers(sd, K), "fitted",
+                   r->response_fitted);
+}
+
 cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *path,
                       export_notes *notes, cf_error *err) {
   (void)notes; /* lossless: nothing to note */
@@ -66,7 +77,7 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
    * "o" values, also when it fails. */
   json_t *doc = json_pack(
       "{s:i, s:{s:s, s:s}, s:o, s:o, s:{s:s, s:s, s:s, s:s, s:s}, "
-      "s:{s:f, s:f, s:I, s:{s:f, s:f, s:b}, s:{s:f, s:f, s:b}, s:{s:s, s:f}}, "
+      "s:{s:f, s:f, s:I, s:{s:f, s:f, s:b}, s:o, s:{s:s, s:f}}, "
       "s:{s:s, s:s, s:o, s:s, s:s, s:{s:o, s:s, s:s}}}",
       "clayfit_preset", 1, "model", "code", m->code, "name", m->name, "params", params, "derived",
       derived, "conventions", "brdf",
@@ -76,12 +87,11 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
       "M4: reflectance of the film-to-clay interface, relative to the film", "model",
       "docs/model.md of clayfit " CLAYFIT_EXPORT_VERSION, "fit", "rmse", r->rmse, "relative_rmse",
       r->relative_rmse, "residuals", (json_int_t)r->residuals, "scale", "value", r->scale, "sd",
-      r->scale_sd, "fitted", r->scale_fitted, "response", "value", r->response, "sd",
-      r->response_sd, "fitted", r->response_fitted, "loss", "type", fit->loss, "scale_sigma",
-      fit->loss_scale, "provenance", "clayfit_version", CLAYFIT_EXPORT_VERSION, "exported",
-      exported, "fit_file", json_text(fit_path), "fit_clayfit_version", fit->clayfit_version,
-      "fit_created", fit->created, "capture", "path", json_text(fit->capture_path), "name",
-      fit->capture_name, "radiometry", fit->radiometry);
+      r->scale_sd, "fitted", r->scale_fitted, "response", response_json(r), "loss", "type",
+      fit->loss, "scale_sigma", fit->loss_scale, "provenance", "clayfit_version",
+      CLAYFIT_EXPORT_VERSION, "exported", exported, "fit_file", json_text(fit_path),
+      "fit_clayfit_version", fit->clayfit_version, "fit_created", fit->created, "capture", "path",
+      json_text(fit->capture_path), "name", fit->capture_name, "radiometry", fit->radiometry);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the preset", path);
   cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);

@@ -22,6 +22,7 @@
 #include "core/clock.h"
 #include "fit_budget.h"
 #include "fit_footprint.h"
+#include "fit_gains.h"
 #include "fit_hidden_base.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
@@ -171,6 +172,17 @@ void fit_add_warning(cf_fit_result *r, const char *format, ...) {
   va_end(args);
 }
 
+/* The response's covariance: the row of its unknown u (a slope) against
+ * the other slopes'. */
+static void response_covariance(const fit_problem *p, const double *covariance, int u,
+                                cf_fit_result *r) {
+  int n = p->num_unknowns, a = p->unknowns[u].slot;
+  for (int v = 0; v < n; ++v)
+    if (p->unknowns[v].kind == FIT_RESPONSE)
+      r->response_covariance[a * CF_RESPONSE_MODEL_KNOTS + p->unknowns[v].slot] =
+          covariance[u * n + v];
+}
+
 /* The result from the solved problem and its covariance. */
 static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const double *covariance,
                              cf_fit_result *r, cf_error *err) {
@@ -187,9 +199,9 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
     if (unk->kind == FIT_LOG_SCALE) {
       r->scale_sd = exp(p->log_scale) * sqrt(fmax(0.0, var)); /* d s = s d log s */
     } else if (unk->kind == FIT_RESPONSE) {
-      r->response_sd = sqrt(fmax(0.0, var));
-    } else if (unk->kind == FIT_LOG_EXPOSURE) {
-      continue;
+      response_covariance(p, covariance, u, r);
+    } else if (unk->kind == FIT_LOG_EXPOSURE || unk->kind == FIT_LOG_BALANCE) {
+      continue; /* (fit_gains_sd, fit_balance_of) */
     } else if (p->at_bound[u]) {
       r->status[unk->slot] = CF_PARAM_AT_BOUND;
       r->sd[unk->slot] = NAN;
@@ -206,15 +218,17 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
       r->correlation[a * r->free_count + b] =
           va > 0.0 && vb > 0.0 ? covariance[map[a] * n + map[b]] / sqrt(va * vb) : (a == b);
     }
-  r->response = p->response;
+  memcpy(r->response, p->response, sizeof r->response);
   r->response_fitted = plan->response;
   r->scale = exp(p->log_scale);
   r->scale_fitted = plan->scale;
   r->images = p->images;
   r->exposures = malloc(p->images * sizeof *r->exposures);
-  if (!r->exposures) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  r->exposure_sd = malloc(p->images * sizeof *r->exposure_sd);
+  if (!r->exposures || !r->exposure_sd) return cf_error_set(err, CF_ENOMEM, "out of memory");
   for (size_t k = 0; k < p->images; ++k) r->exposures[k] = exp(p->log_exposures[k]);
-  return CF_OK;
+  fit_gains_sd(p, covariance, r->exposure_sd);
+  return fit_balance_of(p, plan->exposures == CF_GAINS_PER_IMAGE_RGB, covariance, r, err);
 }
 
 /* One run of fit_run_population: what its steps share. */
@@ -250,12 +264,12 @@ static cf_status normal_room(fit_run *run, cf_error *err) {
 }
 
 /* 2. The start: the multi-start, or the one given (with the response
- * exponent it gives; 1 otherwise). */
+ * slopes it gives; 1 otherwise). */
 static cf_status find_start(fit_run *run, double *params, double *log_scale, double *response,
                             cf_error *err) {
   const cf_fit_options *o = run->o;
   *log_scale = 0.0;
-  *response = 1.0;
+  fit_response_identity(response);
   if (!o->use_start)
     return fit_multistart(run->capture, run->population, o, &run->plan, run->r, params, log_scale,
                           &run->sigma, err);
@@ -266,14 +280,15 @@ static cf_status find_start(fit_run *run, double *params, double *log_scale, dou
   if (sk >= 0 && run->plan.status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
     params[sk] = FIT_SCALE_F0;
   *log_scale = run->plan.scale ? log(o->start_scale) : 0.0;
-  *response = o->start_response > 0.0 ? o->start_response : 1.0;
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+    response[j] = o->start_response[j] > 0.0 ? o->start_response[j] : 1.0;
   return fit_start_sigma(run->capture, run->population, o, params, *log_scale, &run->sigma, err);
 }
 
 /* The problem over the whole population from the refined values: σ, the
- * robust loss, the response exponent when the tone curve is unknown. */
-static cf_status full_problem(fit_run *run, const double *params, double log_scale, double response,
-                              cf_error *err) {
+ * robust loss, the response curve when the tone curve is unknown. */
+static cf_status full_problem(fit_run *run, const double *params, double log_scale,
+                              const double *response, cf_error *err) {
   const cf_fit_options *o = run->o;
   fit_problem *p = &run->p;
   cf_status s = fit_problem_init(p, run->capture, o->model, run->population->index,
@@ -289,12 +304,12 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
    * 29 iterations while the radius halved, 48 iterations in all where 24
    * reach the same cost) */
   p->newton_start = 1; /* from the refinement's (or the best start's) minimum */
-  /* an unknown tone curve: the response exponent is fitted from here on
+  /* an unknown tone curve: the response curve is fitted from here on
    * (the starts and the subsample assume a linear response) */
   cf_capture_summary about;
   cf_capture_summarize(run->capture, &about);
   run->plan.response = about.tone_curve_unknown;
-  p->response = run->plan.response ? response : 1.0;
+  if (run->plan.response) memcpy(p->response, response, sizeof p->response);
   if (s == CF_OK) s = fit_declare(p, &run->plan, err);
   run->has_noise = fit_capture_has_noise(run->capture);
   if (!run->has_noise) {
@@ -336,6 +351,14 @@ static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
   return s;
 }
 
+/* Does the capture hold a JPEG? Its errors are correlated within the
+ * codec's blocks. */
+static int capture_has_jpeg(const cf_capture *capture) {
+  for (size_t k = 0; k < cf_capture_image_count(capture); ++k)
+    if (cf_capture_image_at(capture, k)->jpeg) return 1;
+  return 0;
+}
+
 /* One round of step 4: solve (unless the first finds the problem settled),
  * switch the scale's assumption if the albedo says so, and the
  * covariance, into run->jtj and run->covariance, with *rank_deficient. */
@@ -356,7 +379,10 @@ static cf_status solve_with_covariance(fit_run *run, int round, int *rank_defici
     if (s == CF_OK) s = fit_solve_normal(p, o, o->max_iterations, &run->summary, run->jtj, err);
   }
   if (s == CF_OK) s = fit_free_covariance(p, run->jtj, run->covariance, rank_deficient, err);
-  if (s == CF_OK && !*rank_deficient)
+  int tiles = 0; /* JPEG: the tiles' sandwich (a sample's too) */
+  if (s == CF_OK && !*rank_deficient && capture_has_jpeg(run->capture))
+    s = fit_tile_covariance(p, FIT_JPEG_TILE_PX, run->covariance, &tiles, err);
+  if (s == CF_OK && !*rank_deficient && !tiles)
     s = fit_sample_covariance(p, fit_threads(o), run->covariance, err);
   return s;
 }
@@ -471,12 +497,18 @@ static cf_status report_result(fit_run *run, cf_error *err) {
                     "the capture's radiometry is relative and %s has no interface F0 to "
                     "fix the scale: its albedo is in the lights' relative units",
                     cf_model_info_get(o->model)->code);
+  else if (summary_of_capture.tone_curve_unknown && fit_scale_slot(o->model) < 0)
+    fit_add_warning(r,
+                    "the photos' tone curve is unknown and %s has no interface F0 to fix "
+                    "the level: its albedo trades with the response curve's stretch and is "
+                    "in relative units",
+                    cf_model_info_get(o->model)->code);
   return CF_OK;
 }
 
 /* Steps 3 (on every observation) to 5, from the refined values. */
 static cf_status solve_population(fit_run *run, const double *params, double log_scale,
-                                  double response, cf_error *err) {
+                                  const double *response, cf_error *err) {
   cf_status s = full_problem(run, params, log_scale, response, err);
   if (s == CF_OK) s = settle_weights_and_footprints(run, err);
   if (s == CF_OK) s = solve_until_constrained(run, err);
@@ -496,8 +528,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
 
   /* 2. the start; 3. a larger subsample, then the whole population */
-  double params[CF_MAX_DIM], log_scale, response, clock = cf_now_seconds(), then;
-  s = find_start(&run, params, &log_scale, &response, err);
+  double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
+  double clock = cf_now_seconds(), then;
+  s = find_start(&run, params, &log_scale, response, err);
   if (s != CF_OK) return s;
   r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
   clock = then;
@@ -524,12 +557,19 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
   fit_population population;
   uint32_t *index;
   fit_sample budget = {0};
-  cf_status s = fit_population_of_images(capture, o->use_image, &population, &index, err);
+  /* (a start of its own: cf_fit_auto's chosen model, checked before) */
+  cf_status s = o->use_start ? CF_OK : cf_fit_check_gains(capture, o, err);
+  if (s != CF_OK) return s;
+  s = fit_population_of_images(capture, o->use_image, &population, &index, err);
   size_t in_use = s == CF_OK ? population.count : 0;
   if (s == CF_OK && o->budget > 0 && o->budget < population.count) { /* a pixel budget */
     if ((unsigned)o->sampling >= CF_SAMPLING_COUNT)
       s = cf_error_set(err, CF_EINVAL, "invalid sampling %d", (int)o->sampling);
-    if (s == CF_OK)
+    size_t images = cf_capture_image_count(capture);
+    if (s == CF_OK && o->fit_exposures && images > 1) /* every free gain its own observations */
+      s = fit_budget_draw_images(cf_capture_observations(capture), &population, images, o->budget,
+                                 FIT_GAIN_FLOOR, o->sampling, &budget, err);
+    else if (s == CF_OK)
       s = fit_budget_draw(cf_capture_observations(capture), &population, o->budget, o->sampling,
                           &budget, err);
     if (s == CF_OK) population = (fit_population){budget.index, budget.count, budget.weight};

@@ -70,11 +70,10 @@ cf_status fit_budget_draw(const cf_observations *obs, const fit_population *from
   } else {
     want[0] = 0, want[1] = budget;
   }
-  size_t stride[2], taken[2] = {0, 0}, seen[2] = {0, 0}, m = 0;
-  for (int t = 0; t < 2; ++t) stride[t] = want[t] > 0 && size[t] > want[t] ? size[t] / want[t] : 1;
+  size_t taken[2] = {0, 0}, spread[2] = {0, 0}, m = 0;
   for (size_t i = 0; i < n && m < budget + 2; ++i) {
     int t = stratum[i];
-    if (want[t] == 0 || seen[t]++ % stride[t] != 0 || taken[t] >= want[t] + 1) continue;
+    if (want[t] == 0 || !fit_spread_take(&spread[t], want[t], size[t])) continue;
     sample->index[m] = (uint32_t)member(from, i);
     sample->weight[m++] = (double)t;
     ++taken[t];
@@ -86,4 +85,65 @@ cf_status fit_budget_draw(const cf_observations *obs, const fit_population *from
   sample->count = m;
   free(stratum);
   return CF_OK;
+}
+
+/* The population's members grouped by image (a counting sort): image k's
+ * are order[begin[k] .. begin[k + 1]). */
+static cf_status group_by_image(const cf_observations *obs, const fit_population *from,
+                                size_t images, uint32_t **order, size_t **begin, cf_error *err) {
+  size_t n = from->count;
+  *order = malloc((n ? n : 1) * sizeof **order);
+  *begin = calloc(images + 2, sizeof **begin);
+  if (!*order || !*begin) {
+    free(*order);
+    free(*begin);
+    return cf_error_set(err, CF_ENOMEM, "out of memory grouping %zu observations by image", n);
+  }
+  for (size_t i = 0; i < n; ++i) ++(*begin)[obs->image[member(from, i)] + 2];
+  for (size_t k = 0; k < images; ++k) (*begin)[k + 2] += (*begin)[k + 1];
+  for (size_t i = 0; i < n; ++i) {
+    size_t k = member(from, i);
+    (*order)[(*begin)[obs->image[k] + 1]++] = (uint32_t)k;
+  }
+  return CF_OK;
+}
+
+/* sample += part (the arrays grown; part freed). */
+static cf_status append_sample(fit_sample *sample, fit_sample *part, cf_error *err) {
+  size_t count = sample->count + part->count;
+  uint32_t *index = realloc(sample->index, (count ? count : 1) * sizeof *index);
+  if (index) sample->index = index;
+  double *weight = index ? realloc(sample->weight, (count ? count : 1) * sizeof *weight) : NULL;
+  if (weight) sample->weight = weight;
+  if (!index || !weight) {
+    fit_sample_free(part);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for a sample of %zu observations", count);
+  }
+  memcpy(sample->index + sample->count, part->index, part->count * sizeof *index);
+  memcpy(sample->weight + sample->count, part->weight, part->count * sizeof *weight);
+  sample->count = count;
+  fit_sample_free(part);
+  return CF_OK;
+}
+
+cf_status fit_budget_draw_images(const cf_observations *obs, const fit_population *from,
+                                 size_t images, size_t budget, size_t floor, cf_sampling sampling,
+                                 fit_sample *sample, cf_error *err) {
+  memset(sample, 0, sizeof *sample);
+  uint32_t *order;
+  size_t *begin;
+  cf_status s = group_by_image(obs, from, images, &order, &begin, err);
+  for (size_t k = 0; s == CF_OK && k < images; ++k) {
+    size_t count = begin[k + 1] - begin[k];
+    if (count == 0) continue;
+    size_t share = (size_t)((double)budget * (double)count / (double)from->count + 0.5);
+    fit_population image = {order + begin[k], count, NULL};
+    fit_sample part;
+    s = fit_budget_draw(obs, &image, share > floor ? share : floor, sampling, &part, err);
+    if (s == CF_OK) s = append_sample(sample, &part, err);
+  }
+  free(order);
+  free(begin);
+  if (s != CF_OK) fit_sample_free(sample);
+  return s;
 }

@@ -128,14 +128,14 @@ static void score_candidate(void *user, int m) {
   cf_error *err = &w->err[m];
   w->status[m] = CF_OK;
   if (!c->ok) return; /* not a candidate: nothing to score */
-  double train_cost, test_cost;
+  double train_cost, test_cost, train_log_sigma, test_log_sigma;
   cf_fit_result on_train, on_test;
   cf_status s = fit_score_at(w->capture, w->train, &c->fit, w->choice->sigma, &w->options,
-                             &train_cost, &on_train, err);
+                             &train_cost, &train_log_sigma, &on_train, err);
   if (s == CF_OK) {
     cf_fit_result_free(&on_train);
     s = fit_score_at(w->capture, w->test, &c->fit, w->choice->sigma, &w->options, &test_cost,
-                     &on_test, err);
+                     &test_log_sigma, &on_test, err);
   }
   w->status[m] = s;
   if (s != CF_OK) return;
@@ -144,8 +144,15 @@ static void score_candidate(void *user, int m) {
   c->parameters = c->fit.free_unknowns;
   c->residuals = train_n;
   c->cost = train_cost;
-  c->bic = 2.0 * train_cost + c->parameters * log((double)train_n);
+  /* −2 log L with the Gaussian's 2 Σ log σ where σ depends on the fit (a
+   * fitted response curve carries the noise model: fit_score_at), else
+   * 0; the held-out RMS then times σ's geometric mean, so that a curve
+   * cannot lower either score by stretching σ (docs/fitting.md "Response
+   * curve") */
+  c->bic = 2.0 * train_cost + 2.0 * train_log_sigma + c->parameters * log((double)train_n);
   c->heldout_score = sqrt(2.0 * test_cost / (double)c->heldout_residuals);
+  if (test_log_sigma != 0.0 && on_test.residuals)
+    c->heldout_score *= exp(test_log_sigma / (double)on_test.residuals);
   c->heldout_rmse = on_test.residuals ? on_test.rmse : NAN;
   c->heldout_relative_rmse = on_test.relative_rmse;
   cf_fit_result_free(&on_test);
@@ -231,6 +238,10 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   choice->loss_scale = options[0].loss_scale;
   if (cf_capture_observations(capture)->count == 0)
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+  /* the gains told from the material before any fit (the albedo's trade,
+   * which every model of the ladder has: M0's) */
+  cf_status gains = cf_fit_check_gains(capture, &options[CF_MODEL_LAMBERT], err);
+  if (gains != CF_OK) return gains;
   double clock = cf_now_seconds();
   int exposures = 0;
   for (int m = 0; m < CF_MODEL_COUNT; ++m) exposures |= options[m].fit_exposures;
@@ -257,7 +268,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   o.use_start = 1;
   memcpy(o.start, c->fit.params, sizeof o.start);
   o.start_scale = c->fit.scale;
-  o.start_response = c->fit.response;
+  memcpy(o.start_response, c->fit.response, sizeof o.start_response);
   s = cf_fit_run(capture, &o, result, err);
   if (s != CF_OK) return s;
   result->starts = c->fit.starts;

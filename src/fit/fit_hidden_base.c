@@ -53,18 +53,22 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   out->price = out->slots * log((double)n);
 
   /* the film alone: the base hidden under τ at its bound */
-  double params[CF_MAX_DIM], log_scale = p->log_scale, response = p->response;
+  double params[CF_MAX_DIM], log_scale = p->log_scale, response[CF_RESPONSE_MODEL_KNOTS];
+  memcpy(response, p->response, sizeof response);
   size_t unknowns = (size_t)p->num_unknowns;
   memcpy(params, p->params, sizeof params);
   int *at_bound = malloc((unknowns ? unknowns : 1) * sizeof *at_bound);
   double *log_exposures = malloc((p->images ? p->images : 1) * sizeof *log_exposures);
-  if (!at_bound || !log_exposures) {
+  double *log_balance = malloc(3 * (p->images ? p->images : 1) * sizeof *log_balance);
+  if (!at_bound || !log_exposures || !log_balance) {
     free(at_bound);
     free(log_exposures);
+    free(log_balance);
     return cf_error_set(err, CF_ENOMEM, "out of memory");
   }
   memcpy(at_bound, p->at_bound, unknowns * sizeof *at_bound);
   memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
+  memcpy(log_balance, p->log_balance, 3 * p->images * sizeof *log_balance);
   fit_plan alone = *plan;
   double defaults[CF_MAX_DIM];
   cf_model_default_params(CF_MODEL_CLAY, defaults);
@@ -87,13 +91,15 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   } else { /* the base stays: back to where the test began */
     memcpy(p->params, params, sizeof params);
     p->log_scale = log_scale;
-    p->response = response;
+    memcpy(p->response, response, sizeof response);
     memcpy(p->log_exposures, log_exposures, p->images * sizeof *log_exposures);
+    memcpy(p->log_balance, log_balance, 3 * p->images * sizeof *log_balance);
     cf_status restored = fit_declare(p, plan, err);
     if (restored == CF_OK) memcpy(p->at_bound, at_bound, unknowns * sizeof *at_bound);
     if (s == CF_OK) s = restored;
   }
   free(at_bound);
   free(log_exposures);
+  free(log_balance);
   return s;
 }

@@ -201,13 +201,19 @@ static json_t *footprint_json(const cf_fit_report *rep) {
 static json_t *per_image_json(const cf_fit_report *rep) {
   const cf_fit_result *r = rep->result;
   json_t *per_image = json_array();
-  for (size_t k = 0; k < r->images; ++k)
-    json_array_append_new(
-        per_image,
+  for (size_t k = 0; k < r->images; ++k) {
+    json_t *image =
         json_pack("{s:s, s:f, s:f, s:f, s:I}", "name", cf_capture_image_at(rep->capture, k)->name,
                   "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
                   r->exposures[k], "not_radiance",
-                  (json_int_t)cf_capture_image_at(rep->capture, k)->not_radiance));
+                  (json_int_t)cf_capture_image_at(rep->capture, k)->not_radiance);
+    if (r->exposure_sd) json_object_set_new(image, "exposure_sd", json_real(r->exposure_sd[k]));
+    if (r->white_balance_fitted && r->white_balance && r->white_balance_sd) {
+      json_object_set_new(image, "white_balance", numbers(r->white_balance + 3 * k, 3));
+      json_object_set_new(image, "white_balance_sd", numbers(r->white_balance_sd + 3 * k, 3));
+    }
+    json_array_append_new(per_image, image);
+  }
   return per_image;
 }
 
@@ -246,6 +252,37 @@ static json_t *cores_json(const cf_fit_result *r) {
       "where the lobe's shape shows) and of all the others");
 }
 
+/* The response curve (docs/model.md §5.4): its model, slopes with their
+ * sds and covariance, and the curve sampled every quarter stop of the
+ * decoded value from 2^−8 to 1, each with the linear value R⁻¹(y) and its
+ * sd (docs/fitting.md "Response curve"). */
+enum { CURVE_SAMPLES = 33 };
+static json_t *response_json(const cf_fit_result *r) {
+  enum { K = CF_RESPONSE_MODEL_KNOTS };
+  double knots[K], sd[K];
+  json_t *covariance = json_array(), *curve = json_array();
+  for (int j = 0; j < K; ++j) {
+    knots[j] = cf_response_model_knot(j);
+    sd[j] = sqrt(fmax(0.0, r->response_covariance[j * K + j]));
+    json_array_append_new(covariance, numbers(r->response_covariance + j * K, K));
+  }
+  for (int i = 0; i < CURVE_SAMPLES; ++i) {
+    double y = exp2(-8.0 + 0.25 * i), sd_log;
+    double x = cf_response_model_inverse(r->response, r->response_covariance, y, &sd_log);
+    json_array_append_new(
+        curve, json_pack("{s:f, s:f, s:f}", "decoded", y, "linear", x, "linear_sd", x * sd_log));
+  }
+  return json_pack(
+      "{s:b, s:s, s:o, s:o, s:o, s:o, s:o, s:s}", "fitted", r->response_fitted, "model",
+      CF_RESPONSE_MODEL_NAME, "knots", numbers(knots, K), "slopes", numbers(r->response, K),
+      "slopes_sd", numbers(sd, K), "covariance", covariance, "curve", curve, "meaning",
+      "the camera response R: the decoded photo values are modelled as R(scale x exposure x "
+      "radiance), log R a function of log x whose slope is linear between the knots (x = 1, "
+      "1/3, 1/9, ...; the slopes given) and constant beyond, R(1) = 1; fitted when the capture "
+      "says the tone curve is unknown, else the identity (every slope 1). The curve gives, for decoded "
+      "values y, the linear value x = R^-1(y) and its sd from the slopes' covariance");
+}
+
 /* The sections after the first json_pack (its format has room for no more). */
 static void add_later_sections(json_t *doc, const cf_fit_report *rep,
                                const cf_capture_summary *summary) {
@@ -261,13 +298,7 @@ static void add_later_sections(json_t *doc, const cf_fit_report *rep,
   json_object_set_new(doc, "footprint", footprint_json(rep));
   json_object_set_new(doc, "sample", sample_json(r));
   json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
-  json_object_set_new(
-      doc, "response",
-      json_pack("{s:f, s:f, s:b, s:s}", "value", r->response, "sd", r->response_sd, "fitted",
-                r->response_fitted, "meaning",
-                "the response exponent: the decoded photo values are modelled as "
-                "(scale x exposure x radiance)^value; fitted when the capture says the tone "
-                "curve is unknown, else 1"));
+  json_object_set_new(doc, "response", response_json(r));
 }
 
 /* The capture's path relative to the folder of fit.json (data_schema/

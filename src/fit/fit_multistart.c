@@ -72,8 +72,8 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
 
 /* The base start: the albedo (and, with a free scale, the scale that puts
  * the albedo inside [0, 1]); held slots at their held values. */
-static void base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
-                       double *params, double *log_scale) {
+void fit_base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
+                    double *params, double *log_scale) {
   const cf_model_info *m = cf_model_info_get(p->model);
   cf_model_default_params(p->model, params);
   for (int k = 0; k < m->dim; ++k)
@@ -146,7 +146,7 @@ static int reached_earlier_end(void *user, const double *x, double cost) {
 
 /* One start, on a copy of the subsample's problem with its own values
  * (the copy shares the problem's arrays, which a solve only reads, but for
- * the exposures, which it writes). */
+ * the exposures and the white balance, which it writes). */
 typedef struct start_job {
   fit_problem problem;
   cf_fit_options options;
@@ -163,6 +163,23 @@ static void run_job(void *user, int i) {
   if (job->status == CF_OK && !job->summary.stopped &&
       fit_normal_equations(&job->problem, 1, job->h, NULL, NULL, &job->err) != CF_OK)
     job->h[0] = NAN; /* no test within the noise of this minimum */
+}
+
+/* Job j of a batch: a copy of the subsample's problem at its start, with
+ * its own exposures and white balance (arrays the job owns). */
+static void prepare_job(start_job *job, const fit_problem *sub, const cf_fit_options *o,
+                        const double *start, double log_scale, int width) {
+  double *exposures = job->problem.log_exposures, *balance = job->problem.log_balance;
+  job->problem = *sub;
+  job->problem.log_exposures = exposures;
+  job->problem.log_balance = balance;
+  memcpy(exposures, sub->log_exposures, sub->images * sizeof *exposures);
+  memcpy(balance, sub->log_balance, 3 * sub->images * sizeof *balance);
+  memcpy(job->problem.params, start, sizeof job->problem.params);
+  job->problem.log_scale = log_scale;
+  job->problem.radius = 0.0; /* a start far from the last one's end */
+  job->options = *o;
+  if (width > 1) job->options.threads = 1;
 }
 
 /* Run `count` starts of `model` on the problem to convergence (or to an
@@ -186,6 +203,8 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
   for (int j = 0; s == CF_OK && j < width; ++j)
     if (!(jobs[j].problem.log_exposures =
               malloc((sub->images ? sub->images : 1) * sizeof(double))) ||
+        !(jobs[j].problem.log_balance =
+              malloc(3 * (sub->images ? sub->images : 1) * sizeof(double))) ||
         !(jobs[j].h = malloc((n ? n * n : 1) * sizeof(double))))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) {
@@ -203,18 +222,7 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
   for (int i = 0; s == CF_OK && i < count; i += width) {
     fit_progress(o, "multi-start", (size_t)i, (size_t)count);
     int batch = count - i < width ? count - i : width;
-    for (int j = 0; j < batch; ++j) {
-      start_job *job = &jobs[j];
-      double *exposures = job->problem.log_exposures;
-      job->problem = *sub;
-      job->problem.log_exposures = exposures;
-      memcpy(exposures, sub->log_exposures, sub->images * sizeof *exposures);
-      memcpy(job->problem.params, starts[i + j], sizeof starts[i + j]);
-      job->problem.log_scale = log_scale;
-      job->problem.radius = 0.0; /* a start far from the last one's end */
-      job->options = *o;
-      if (width > 1) job->options.threads = 1;
-    }
+    for (int j = 0; j < batch; ++j) prepare_job(&jobs[j], sub, o, starts[i + j], log_scale, width);
     cf_parallel_for(batch, width, run_job, jobs);
     for (int j = 0; s == CF_OK && j < batch; ++j) { /* in the starts' order */
       start_job *job = &jobs[j];
@@ -245,6 +253,7 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
   sub->stop_user = NULL;
   for (int j = 0; jobs && j < width; ++j) {
     free(jobs[j].problem.log_exposures);
+    free(jobs[j].problem.log_balance);
     free(jobs[j].h);
   }
   free(jobs);
@@ -272,7 +281,7 @@ static cf_status warm_dielectric(const cf_capture *capture, const cf_fit_options
   s = fit_problem_set_sample_weights(&sub, sample->weight, err);
   double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM],
       log_scales[CF_FIT_MAX_STARTS];
-  base_start(&sub, &plan, &o2, base, &log_scale);
+  fit_base_start(&sub, &plan, &o2, base, &log_scale);
   int held[CF_MAX_DIM];
   for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan.status[k] != CF_PARAM_FITTED;
   int count = fit_starts(CF_MODEL_DIELECTRIC, base, held, NULL, starts, CF_FIT_MAX_STARTS);
@@ -298,7 +307,7 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
       fit_problem_init_sample(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
   if (s != CF_OK) return s;
   double base[CF_MAX_DIM], log_scale;
-  base_start(&sub, plan, o, base, &log_scale);
+  fit_base_start(&sub, plan, o, base, &log_scale);
   int held[CF_MAX_DIM];
   for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan->status[k] != CF_PARAM_FITTED;
   /* M3 and M4 start from the fitted M2 */

@@ -17,6 +17,12 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
                          const cf_fit_options *o, const fit_plan *plan, cf_fit_result *r,
                          double *best_params, double *best_log_scale, double *sigma, cf_error *err);
 
+/* The base start: the closed-form albedo of the least specular half of
+ * the problem's observations (and, with a free scale, the scale that puts
+ * it inside [0, 1]), every other slot at its default or held value. */
+void fit_base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
+                    double *params, double *log_scale);
+
 /* σ estimated from the residuals at a given start (the start given in the
  * options instead of the multi-start), on a subsample of the population. */
 cf_status fit_start_sigma(const cf_capture *capture, const fit_population *population,

@@ -30,13 +30,15 @@ cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_p
   memset(plan, 0, sizeof *plan);
   for (int k = 0; k < m->dim; ++k) plan->status[k] = o->hold[k] ? CF_PARAM_HELD : CF_PARAM_FITTED;
   int sk = fit_scale_slot(o->model);
-  if (summary.radiometry_relative && sk >= 0) {
+  /* an unknown tone curve leaves the level unmeasured too: the curve's
+   * stretch R(x/k) trades with every lobe's level (docs/model.md §5.4) */
+  if ((summary.radiometry_relative || summary.tone_curve_unknown) && sk >= 0) {
     /* the scale is fitted, fixed by the interface F0 (held, 0.04 unless the
      * user says otherwise) */
     plan->scale = 1;
     if (!o->free[sk] && !o->hold[sk]) plan->status[sk] = CF_PARAM_HELD_FOR_SCALE;
   }
-  plan->exposures = o->fit_exposures && cf_capture_image_count(capture) > 1;
+  plan->exposures = cf_capture_image_count(capture) > 1 ? o->fit_exposures : CF_GAINS_NONE;
   return CF_OK;
 }
 
@@ -46,7 +48,11 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   for (int k = 0; k < p->dim; ++k)
     if (plan->status[k] == CF_PARAM_FITTED) fit_problem_free_slot(p, k);
   if (plan->scale) fit_problem_free_scale(p);
-  if (plan->exposures) fit_problem_free_exposures(p);
+  if (plan->exposures) {
+    fit_problem_group_gains(p, plan->exposures == CF_GAINS_PER_LIGHT);
+    fit_problem_free_exposures(p);
+  }
+  if (plan->exposures == CF_GAINS_PER_IMAGE_RGB) fit_problem_free_balance(p);
   if (plan->response) fit_problem_free_response(p);
   return fit_problem_finish(p, err);
 }

@@ -14,8 +14,9 @@
  * whether the global scale and the exposures are. */
 typedef struct fit_plan {
   cf_param_status status[CF_MAX_DIM];
-  int scale, exposures;
-  int response; /* the response exponent (an unknown tone curve) */
+  int scale;
+  int exposures; /* CF_GAINS_*: the gains free, per image or light, or RGB */
+  int response; /* the response curve (an unknown tone curve) */
 } fit_plan;
 
 /* The interface F0 that fixes the absolute scale of a capture whose lights

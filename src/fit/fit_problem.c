@@ -54,16 +54,13 @@ cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from
   double threshold = order_kth_smallest(sorted, n, n - n / 16);
   size_t specular = 0;
   for (size_t i = 0; i < n; ++i) specular += score[i] >= threshold;
-  /* per stratum: how many to take, every stride-th */
+  /* per stratum: how many to take, spread evenly over it */
   size_t want[2] = {target / 4, target - target / 4}, size[2] = {specular, n - specular};
-  size_t stride[2], taken[2] = {0, 0}, seen[2] = {0, 0};
-  for (int t = 0; t < 2; ++t) {
-    stride[t] = want[t] > 0 && size[t] > want[t] ? size[t] / want[t] : 1;
-  }
+  size_t taken[2] = {0, 0}, spread[2] = {0, 0};
   size_t m = 0;
   for (size_t i = 0; i < n && m < capacity; ++i) {
     int t = score[i] >= threshold ? 0 : 1;
-    if (seen[t]++ % stride[t] != 0 || taken[t] >= want[t] + 1) continue;
+    if (!fit_spread_take(&spread[t], want[t], size[t])) continue;
     sample->index[m] = from->index ? from->index[i] : (uint32_t)i;
     sample->weight[m] = (double)t; /* the stratum, for now */
     ++taken[t];
@@ -123,7 +120,7 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->last_image = (uint32_t)(p->images - 1);
   p->loss = CF_LOSS_NONE;
   p->loss_scale = 3.0;
-  p->response = 1.0;
+  fit_response_identity(p->response);
   p->block_size = BLOCK_SIZE;
   p->threads = threads > 1 ? threads : 1;
   cf_model_default_params(model, p->params);
@@ -133,14 +130,21 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->weight = malloc(3 * pairs * sizeof *p->weight);
   p->inv_sigma = malloc(3 * p->count * sizeof *p->inv_sigma);
   p->log_exposures = calloc(p->images, sizeof *p->log_exposures);
+  p->log_balance = calloc(3 * (p->images ? p->images : 1), sizeof *p->log_balance);
+  p->gain_group = malloc((p->images ? p->images : 1) * sizeof *p->gain_group);
+  p->group_image = malloc((p->images ? p->images : 1) * sizeof *p->group_image);
+  p->light_of_image = malloc((p->images ? p->images : 1) * sizeof *p->light_of_image);
+  for (size_t k = 0; p->light_of_image && k < p->images; ++k)
+    p->light_of_image[k] = cf_capture_image_light_id(capture, k);
   p->y = malloc(3 * (p->count ? p->count : 1) * sizeof *p->y);
   p->image = malloc((p->count ? p->count : 1) * sizeof *p->image);
   p->flags = malloc(p->count ? p->count : 1);
   if (!p->geometry || !p->weight || !p->inv_sigma || !p->log_exposures || !p->y || !p->image ||
-      !p->flags) {
+      !p->flags || !p->gain_group || !p->group_image || !p->light_of_image || !p->log_balance) {
     fit_problem_release(p);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", p->count);
   }
+  fit_problem_group_gains(p, 0); /* a gain per image, when free */
   /* the geometry of every (observation, light) pair, and E c_i (in parts
    * on the threads: for DiLiGenT's 1.4 M observations, 0.25 s on one) */
   init_job job = {p, p->threads > 1 && p->count >= INIT_PARALLEL_MIN ? 4 * p->threads : 1};
@@ -176,10 +180,12 @@ typedef struct fit_scratch {
   double *f;                                     /* 3 × pairs: the model's values */
   double *grad;                                  /* 3 × dim × jacobian_pairs: their gradients */
   int *place;        /* columns: each unknown's place among the block's */
-  int *gain_column;  /* columns: where the log gain goes */
-  double *gain_sign; /* columns */
+  int *gain_column;  /* 3 × columns: where each channel's log gain goes */
+  double *gain_sign; /* 3 × columns */
   double *log_e;     /* images */
-  int *exposure_u;   /* images: image k's exposure's unknown, or −1 */
+  int *exposure_u;   /* images: gain group g's unknown, or −1 */
+  double *log_b;     /* 3 × images: the white balance */
+  int *balance_u;    /* 2 × images: image k's red and blue balance's unknowns, or −1 */
 } fit_scratch;
 
 static void scratch_free_arrays(fit_scratch *s) {
@@ -190,6 +196,8 @@ static void scratch_free_arrays(fit_scratch *s) {
   free(s->gain_sign);
   free(s->log_e);
   free(s->exposure_u);
+  free(s->log_b);
+  free(s->balance_u);
 }
 
 /* Room in the scratch for an evaluation of `pairs` pairs, with the
@@ -200,9 +208,13 @@ static int scratch_fit(fit_scratch *s, const fit_problem *p, size_t pairs, int j
   if (images > s->images) {
     free(s->log_e);
     free(s->exposure_u);
+    free(s->log_b);
+    free(s->balance_u);
     s->log_e = malloc(images * sizeof *s->log_e);
     s->exposure_u = malloc(images * sizeof *s->exposure_u);
-    s->images = s->log_e && s->exposure_u ? images : 0;
+    s->log_b = malloc(3 * images * sizeof *s->log_b);
+    s->balance_u = malloc(2 * images * sizeof *s->balance_u);
+    s->images = s->log_e && s->exposure_u && s->log_b && s->balance_u ? images : 0;
     if (!s->images) return 0;
   }
   if (pairs > s->pairs) {
@@ -223,8 +235,8 @@ static int scratch_fit(fit_scratch *s, const fit_problem *p, size_t pairs, int j
     free(s->gain_column);
     free(s->gain_sign);
     s->place = malloc(columns * sizeof *s->place);
-    s->gain_column = malloc(columns * sizeof *s->gain_column);
-    s->gain_sign = malloc(columns * sizeof *s->gain_sign);
+    s->gain_column = malloc(3 * columns * sizeof *s->gain_column);
+    s->gain_sign = malloc(3 * columns * sizeof *s->gain_sign);
     s->columns = s->place && s->gain_column && s->gain_sign ? columns : 0;
     if (!s->columns) return 0;
   }
@@ -274,6 +286,10 @@ void fit_problem_release(fit_problem *p) {
   free(p->weight);
   free(p->inv_sigma);
   free(p->log_exposures);
+  free(p->gain_group);
+  free(p->log_balance);
+  free(p->group_image);
+  free(p->light_of_image);
   free(p->block_column_begin);
   free(p->block_column);
   free(p->sample_root);
@@ -306,17 +322,33 @@ int fit_capture_has_noise(const cf_capture *capture) {
   return capture_noise(capture, &read, &shot);
 }
 
+/* The noise model's variance at a decoded value μ: read² + shot · max(μ, 0);
+ * with a response curve the sensor's noise, before the curve, carried
+ * through it (docs/model.md §6.2): R'(x)² (read² + shot · x) at
+ * x = R⁻¹(μ), R' taken at x >= the last knot (where 8-bit photos end;
+ * R' finite and positive there). With the identity curve the same as
+ * without one. */
+static double noise_variance(const fit_problem *p, double read, double shot, double mu) {
+  if (!p->response_on) return read * read + shot * fmax(mu, 0.0);
+  double x = mu > 0.0 ? cf_response_model_inverse(p->response, NULL, mu, NULL) : 0.0, slope;
+  cf_response_model_value(p->response, fmax(x, cf_response_model_knot(CF_RESPONSE_MODEL_KNOTS - 1)),
+                          &slope, NULL);
+  return slope * slope * (read * read + shot * x);
+}
+
 /* 1/σ of the noise model at the values mu (3 per observation used: the
- * measurements or the predictions): the variance read² + shot · max(μ, 0),
- * floored at its smallest positive value over them (a dark pixel with no
- * read noise would otherwise weigh infinitely). */
+ * measurements or the predictions; mu may be p->inv_sigma itself),
+ * the variance floored at its smallest positive value over them (a dark
+ * pixel with no read noise would otherwise weigh infinitely). */
 static void noise_inv_sigma(fit_problem *p, double read, double shot, const double *mu) {
   size_t n = 3 * p->count;
-  double floor = read > 0.0 ? read * read : HUGE_VAL;
-  for (size_t i = 0; read == 0.0 && i < n; ++i)
-    if (shot * mu[i] > 0.0) floor = fmin(floor, shot * mu[i]);
-  for (size_t i = 0; i < n; ++i)
-    p->inv_sigma[i] = 1.0 / sqrt(fmax(read * read + shot * fmax(mu[i], 0.0), floor));
+  double floor = HUGE_VAL;
+  for (size_t i = 0; i < n; ++i) {
+    double v = noise_variance(p, read, shot, mu[i]);
+    p->inv_sigma[i] = v; /* (after mu[i] is read: in place) */
+    if (v > 0.0) floor = fmin(floor, v);
+  }
+  for (size_t i = 0; i < n; ++i) p->inv_sigma[i] = 1.0 / sqrt(fmax(p->inv_sigma[i], floor));
 }
 
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma) {
@@ -348,7 +380,7 @@ cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_err
 void fit_problem_clear_unknowns(fit_problem *p) {
   p->num_unknowns = 0;
   p->unknowns_failed = 0;
-  p->response_on = p->response != 1.0;
+  p->response_on = !fit_response_is_identity(p->response);
 }
 
 /* Room for `capacity` unknowns in the unknowns' arrays (kept as they are). */
@@ -397,18 +429,47 @@ void fit_problem_free_scale(fit_problem *p) {
 }
 
 void fit_problem_free_response(fit_problem *p) {
-  add_unknown(p, FIT_RESPONSE, 0, FIT_RESPONSE_LOWER, FIT_RESPONSE_UPPER);
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+    add_unknown(p, FIT_RESPONSE, j, CF_RESPONSE_MODEL_SLOPE_LOWER, CF_RESPONSE_MODEL_SLOPE_UPPER);
   p->response_on = 1;
 }
 
+void fit_response_identity(double *slopes) {
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) slopes[j] = 1.0;
+}
+
+int fit_response_is_identity(const double *slopes) {
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+    if (slopes[j] != 1.0) return 0;
+  return 1;
+}
+
+void fit_problem_group_gains(fit_problem *p, int per_light) {
+  p->gain_groups = 0;
+  for (size_t k = 0; k < p->images; ++k) {
+    long light = per_light ? p->light_of_image[k] : -1;
+    size_t g = p->gain_groups;
+    if (light >= 0 && (size_t)light < k) g = p->gain_group[light]; /* (light: its first image) */
+    if (g == p->gain_groups) p->group_image[p->gain_groups++] = (uint32_t)k;
+    p->gain_group[k] = (uint32_t)g;
+  }
+}
+
 void fit_problem_free_exposures(fit_problem *p) {
+  for (size_t g = 0; g + 1 < p->gain_groups; ++g) /* (contiguous, in the groups' order) */
+    add_unknown(p, FIT_LOG_EXPOSURE, (int)g, -HUGE_VAL, HUGE_VAL);
+}
+
+void fit_problem_free_balance(fit_problem *p) {
   for (size_t k = 0; k + 1 < p->images; ++k)
-    add_unknown(p, FIT_LOG_EXPOSURE, (int)k, -HUGE_VAL, HUGE_VAL);
+    for (int j = 0; j < 2; ++j)
+      add_unknown(p, FIT_LOG_BALANCE, (int)(2 * k) + j, -HUGE_VAL, HUGE_VAL);
 }
 
 /* The blocks and their columns: the model's, the scale's and the
- * response's in every block; an exposure's where its image is (every
- * exposure where the last image is). */
+ * response's in every block; a gain's where its group's images are (every
+ * gain where the last group's are), a white balance's where its image is
+ * (every one where the last image is). */
 cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
   if (p->unknowns_failed)
     return cf_error_set(err, CF_ENOMEM, "out of memory for the fit's unknowns (%d and more)",
@@ -425,8 +486,10 @@ cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
   for (size_t b = 0; !failed && b < p->num_blocks; ++b) {
     size_t begin = b * p->block_size;
     size_t end = p->count - begin < p->block_size ? p->count : begin + p->block_size;
-    for (size_t i = begin; i < end; ++i) seen[p->image[i]] = 1;
-    int has_last = seen[p->last_image];
+    for (size_t i = begin; i < end; ++i) /* (bit 0: a group's images, 1: an image) */
+      seen[p->gain_group[p->image[i]]] |= 1, seen[p->image[i]] |= 2;
+    int has_last = p->gain_groups > 0 && (seen[p->gain_groups - 1] & 1);
+    int has_last_image = p->images > 0 && (seen[p->images - 1] & 2);
     size_t k = p->block_column_begin[b];
     if (k + (size_t)p->num_unknowns + 1 > capacity) { /* room for this block's */
       capacity = 2 * (k + (size_t)p->num_unknowns + 1);
@@ -439,10 +502,13 @@ cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
     }
     for (int u = 0; u < p->num_unknowns; ++u) {
       const fit_unknown *unk = &p->unknowns[u];
-      if (unk->kind != FIT_LOG_EXPOSURE || has_last || seen[unk->slot]) p->block_column[k++] = u;
+      int in_block = unk->kind == FIT_LOG_EXPOSURE   ? has_last || (seen[unk->slot] & 1)
+                     : unk->kind == FIT_LOG_BALANCE ? has_last_image || (seen[unk->slot / 2] & 2)
+                                                    : 1;
+      if (in_block) p->block_column[k++] = u;
     }
     p->block_column_begin[b + 1] = k;
-    for (size_t i = begin; i < end; ++i) seen[p->image[i]] = 0;
+    for (size_t i = begin; i < end; ++i) seen[p->gain_group[p->image[i]]] = seen[p->image[i]] = 0;
   }
   free(seen);
   if (failed || !scratch_pool_make(p))
@@ -457,20 +523,34 @@ void fit_problem_get_x(const fit_problem *p, double *x) {
            : u->kind == FIT_LOG_SLOT    ? log(p->params[u->slot])
            : u->kind == FIT_SQUARE_SLOT ? p->params[u->slot] * p->params[u->slot]
            : u->kind == FIT_LOG_SCALE   ? p->log_scale
-           : u->kind == FIT_RESPONSE    ? p->response
-                                        : p->log_exposures[u->slot];
+           : u->kind == FIT_RESPONSE    ? p->response[u->slot]
+           : u->kind == FIT_LOG_BALANCE ? p->log_balance[3 * (u->slot / 2) + 2 * (u->slot % 2)]
+                                        : p->log_exposures[p->group_image[u->slot]];
   }
 }
 
-/* The values x stands for: params, log s, log e_k (the last image's from
- * the others). */
+/* The white balance x stands for (its unknowns from x[first]: image k's
+ * red and blue at 2k, 2k + 1; the last image's minus the others' sum). */
+static void balance_at(const fit_problem *p, const double *x, int first, double *log_balance) {
+  double sum[2] = {0.0, 0.0};
+  for (size_t k = 0; k + 1 < p->images; ++k)
+    for (int j = 0; j < 2; ++j)
+      sum[j] += log_balance[3 * k + 2 * (size_t)j] = x[first + 2 * (int)k + j];
+  log_balance[3 * (p->images - 1)] = -sum[0];
+  log_balance[3 * (p->images - 1) + 2] = -sum[1];
+}
+
+/* The values x stands for: params, log s, the response's slopes, log e_k
+ * of every image (its gain group's; the last group's from the others) and
+ * the white balance (3 × images; NULL: not wanted). */
 static void values_at(const fit_problem *p, const double *x, double *params, double *log_scale,
-                      double *response, double *log_exposures) {
+                      double *response, double *log_exposures, double *log_balance) {
   memcpy(params, p->params, sizeof p->params);
   *log_scale = p->log_scale;
-  *response = p->response;
+  memcpy(response, p->response, sizeof p->response);
   if (log_exposures) memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
-  int exposures_free = 0;
+  if (log_balance) memcpy(log_balance, p->log_balance, 3 * p->images * sizeof *log_balance);
+  int first_gain = -1, first_balance = -1;
   for (int i = 0; i < p->num_unknowns; ++i) {
     const fit_unknown *u = &p->unknowns[i];
     if (u->kind == FIT_MODEL_SLOT)
@@ -482,23 +562,29 @@ static void values_at(const fit_problem *p, const double *x, double *params, dou
     else if (u->kind == FIT_LOG_SCALE)
       *log_scale = x[i];
     else if (u->kind == FIT_RESPONSE)
-      *response = x[i];
-    else if (log_exposures)
-      log_exposures[u->slot] = x[i], exposures_free = 1;
+      response[u->slot] = x[i];
+    else if (u->kind == FIT_LOG_BALANCE && first_balance < 0)
+      first_balance = i; /* contiguous, image k's red and blue at 2k, 2k + 1 */
+    else if (u->kind == FIT_LOG_EXPOSURE && first_gain < 0)
+      first_gain = i; /* the gains' unknowns: contiguous, group g at first_gain + g */
   }
-  if (exposures_free) {
+  if (first_balance >= 0 && log_balance) balance_at(p, x, first_balance, log_balance);
+  if (first_gain >= 0 && log_exposures) {
     double sum = 0.0;
-    for (size_t k = 0; k + 1 < p->images; ++k) sum += log_exposures[k];
-    log_exposures[p->last_image] = -sum;
+    for (size_t g = 0; g + 1 < p->gain_groups; ++g) sum += x[first_gain + (int)g];
+    for (size_t k = 0; k < p->images; ++k)
+      log_exposures[k] = p->gain_group[k] + 1 == p->gain_groups
+                             ? -sum
+                             : x[first_gain + (int)p->gain_group[k]];
   }
 }
 
 void fit_problem_set_x(fit_problem *p, const double *x) {
-  double params[CF_MAX_DIM], log_scale, response;
-  values_at(p, x, params, &log_scale, &response, p->log_exposures);
+  double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
+  values_at(p, x, params, &log_scale, response, p->log_exposures, p->log_balance);
   memcpy(p->params, params, sizeof params);
   p->log_scale = log_scale;
-  p->response = response;
+  memcpy(p->response, response, sizeof response);
 }
 
 /* ---- the loss, per scalar residual ----
@@ -526,6 +612,37 @@ static double robust(const fit_problem *p, double s, double *rho1) {
   return s;
 }
 
+double fit_problem_loss_weight(const fit_problem *p, double s) {
+  double rho1 = 1.0;
+  robust(p, s, &rho1);
+  return rho1;
+}
+
+double fit_problem_censored_residual(double z, double *slope) {
+  /* beyond 30, 1 − Φ(z) is below 1e-197 (t² would underflow) */
+  if (!(z < 30.0)) {
+    *slope = 0.0;
+    return 0.0;
+  }
+  if (z < -37.0) { /* erfc underflows: Φ(z) = φ(z)/(−z) (1 − 1/z² + 3/z⁴ − …) */
+    double w = 1.0 / (z * z), series = 1.0 - w + 3.0 * w * w;
+    double t = -sqrt(z * z + 2.0 * log(-z) + 1.8378770664093453 - 2.0 * log(series));
+    double dseries = (2.0 * w - 12.0 * w * w) / z; /* d series / dz */
+    *slope = (z + 1.0 / z - dseries / series) / t;
+    return t;
+  }
+  double tail = 0.5 * erfc(z / sqrt(2.0)); /* 1 − Φ(z) */
+  double phi_cdf = 0.5 * erfc(-z / sqrt(2.0));
+  double cost = -2.0 * (z > 0.0 ? log1p(-tail) : log(phi_cdf));
+  if (!(cost > 0.0)) {
+    *slope = 0.0;
+    return 0.0;
+  }
+  double t = sqrt(cost), density = 0.3989422804014327 * exp(-0.5 * z * z); /* φ(z) */
+  *slope = density / (phi_cdf * t);
+  return -t;
+}
+
 /* ---- residuals ---- */
 
 /* The channel a model slot moves: c for component c of an RGB parameter,
@@ -541,7 +658,7 @@ static int slot_channel(cf_model_id model, int slot) {
  * gain (the scale's and the image's exposure's derivative, which are the
  * same), then the response. Rows add here without indirection; the sums go
  * to the block's columns when the image changes (fit_problem_evaluate). */
-enum { LOCAL_MAX = CF_MAX_DIM + 2 };
+enum { LOCAL_MAX = CF_MAX_DIM + 1 + CF_RESPONSE_MODEL_KNOTS };
 typedef struct local_normal {
   int size;
   double a[LOCAL_MAX][LOCAL_MAX]; /* lower triangle */
@@ -680,23 +797,15 @@ static double model_value(const double *w, const double *f, const double *grad, 
 
 /* The prediction μ of a channel from its linear value, gain · model
  * (docs/model.md (40)): the linear value itself, or with a response
- * exponent γ, linear^γ (0 where the linear value is not positive: no
- * light, no prediction). With chain non-NULL, also ∂μ/∂linear (γ μ /
- * linear; 1 without a response) and in *log_linear log(linear) (0 where
- * it is not positive, or without a response). */
-static double predict_channel(int response_on, double response, double linear, double *chain,
-                              double *log_linear) {
-  if (chain) {
-    *chain = 1.0;
-    *log_linear = 0.0;
-  }
+ * curve, R(linear) (0 where the linear value is not positive: no light,
+ * no prediction). With chain non-NULL, also ∂μ/∂linear (1 without a
+ * response) and, with a response, in dslope ∂μ/∂a_j (CF_RESPONSE_MODEL_KNOTS;
+ * untouched without one: no slope is free then). */
+static double predict_channel(int response_on, const double *response, double linear, double *chain,
+                              double *dslope) {
+  if (chain) *chain = 1.0;
   if (!response_on) return linear;
-  double prediction = linear > 0.0 ? pow(linear, response) : 0.0;
-  if (chain) {
-    *chain = linear > 0.0 ? response * prediction / linear : 0.0;
-    *log_linear = linear > 0.0 ? log(linear) : 0.0;
-  }
-  return prediction;
+  return cf_response_model_value(response, linear, chain, dslope);
 }
 
 /* ---- one block's cost and normal equations (fit_problem_evaluate) ---- */
@@ -707,13 +816,16 @@ typedef struct block_eval {
   fit_scratch *s;
   size_t first_pair; /* the block's first pair, where f and grad start */
   double *f, *grad;  /* the model's values and gradients (grad NULL: cost alone) */
-  double params[CF_MAX_DIM], log_scale, response;
+  double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
   /* per channel, the model unknowns that move it, their slots and
    * d param / d x (1, ρ for log ρ, 1/(2σ) for σ²) */
   int channel_u[3][CF_MAX_DIM], channel_slot[3][CF_MAX_DIM], channel_count[3];
   double channel_factor[3][CF_MAX_DIM];
-  int scale_u, response_u; /* their unknowns, or −1 */
+  /* the scale's and the response's slopes' unknowns, or −1 */
+  int scale_u, response_u[CF_RESPONSE_MODEL_KNOTS];
+  int response_free;       /* any slope free */
   int exposures;           /* any exposure free (s->exposure_u: whose) */
+  int balance;             /* any white balance free (s->balance_u: whose) */
 } block_eval;
 
 /* The normal equations of a block over its k columns, and each channel's
@@ -733,19 +845,24 @@ typedef struct block_normal {
  * image's exposure's, and per channel the model's. */
 static void unknowns_at(block_eval *e, const double *x) {
   const fit_problem *p = e->p;
-  values_at(p, x, e->params, &e->log_scale, &e->response, e->s->log_e);
-  e->scale_u = e->response_u = -1;
-  e->exposures = 0;
+  values_at(p, x, e->params, &e->log_scale, e->response, e->s->log_e, e->s->log_b);
+  e->scale_u = -1;
+  e->response_free = 0;
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) e->response_u[j] = -1;
+  e->exposures = e->balance = 0;
   for (size_t i = 0; i < p->images; ++i) e->s->exposure_u[i] = -1;
+  for (size_t i = 0; i < 2 * p->images; ++i) e->s->balance_u[i] = -1;
   for (int u = 0; u < p->num_unknowns; ++u) {
     const fit_unknown *unk = &p->unknowns[u];
     if (unk->kind == FIT_SQUARE_SLOT) e->params[unk->slot] = fmax(e->params[unk->slot], 1e-6);
     if (unk->kind == FIT_LOG_SCALE)
       e->scale_u = u;
     else if (unk->kind == FIT_RESPONSE)
-      e->response_u = u;
+      e->response_u[unk->slot] = u, e->response_free = 1;
     else if (unk->kind == FIT_LOG_EXPOSURE)
       e->s->exposure_u[unk->slot] = u, e->exposures = 1;
+    else if (unk->kind == FIT_LOG_BALANCE)
+      e->s->balance_u[unk->slot] = u, e->balance = 1;
   }
   for (int c = 0; c < 3; ++c) e->channel_count[c] = 0;
   for (int u = 0; u < p->num_unknowns; ++u) {
@@ -782,34 +899,66 @@ static void normal_layout(const block_eval *e, size_t block, block_normal *n) {
     local_map *lm = &n->map[c];
     int size = e->channel_count[c];
     for (int q = 0; q < size; ++q) lm->column[q] = place[e->channel_u[c][q]];
-    lm->gain = e->scale_u >= 0 || e->exposures ? size++ : -1;
-    if (e->response_u >= 0) lm->column[size++] = place[e->response_u];
-    lm->gain_column = e->s->gain_column;
-    lm->gain_sign = e->s->gain_sign;
+    lm->gain = e->scale_u >= 0 || e->exposures || e->balance ? size++ : -1;
+    for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+      if (e->response_u[j] >= 0) lm->column[size++] = place[e->response_u[j]];
+    size_t stride = (size_t)p->num_unknowns + 1; /* (scratch_fit's columns) */
+    lm->gain_column = e->s->gain_column + (size_t)c * stride;
+    lm->gain_sign = e->s->gain_sign + (size_t)c * stride;
     lm->gain_count = 0;
     n->local[c].size = size;
   }
 }
 
+/* Red's (c 0) and blue's (c 2) white balance of `image` among channel
+ * c's log gain columns after `count` (for the last image, minus every
+ * other image's); returns the new count. */
+static int balance_columns(const block_eval *e, uint32_t image, int c, int *column, double *sign,
+                           int count) {
+  const fit_problem *p = e->p;
+  const int *place = e->s->place, *balance_u = e->s->balance_u;
+  if (!e->balance || c == 1) return count;
+  int j = c / 2;
+  if (image + 1 == p->images) {
+    for (size_t k = 0; k + 1 < p->images; ++k)
+      if (balance_u[2 * k + (size_t)j] >= 0)
+        column[count] = place[balance_u[2 * k + (size_t)j]], sign[count++] = -1.0;
+  } else if (balance_u[2 * image + (uint32_t)j] >= 0) {
+    column[count] = place[balance_u[2 * image + (uint32_t)j]], sign[count++] = 1.0;
+  }
+  return count;
+}
+
 /* The rows of a new image begin: the last image's sums into jtj and jtu
  * (unless there was none), and where this image's log gain goes: the
- * scale's column and its exposure's (for the last image, minus every
- * exposure's: log e_last = −Σ of the others, docs/model.md (41)). */
+ * scale's column and its gain group's (for the last group, minus every
+ * other group's: log e_last = −Σ of the others, docs/model.md (41)), and
+ * in red and blue its white balance's. */
 static void next_image(const block_eval *e, block_normal *n, int had_image, uint32_t image) {
   const fit_problem *p = e->p;
+  uint32_t group = p->gain_group[image];
   const int *place = e->s->place, *exposure_u = e->s->exposure_u;
+  size_t stride = (size_t)p->num_unknowns + 1; /* each channel's (normal_layout) */
   int *gain_column = e->s->gain_column, count = 0;
   double *gain_sign = e->s->gain_sign;
   for (int c = 0; c < 3 && had_image; ++c)
     local_flush(&n->local[c], &n->map[c], n->k, n->jtj, n->jtu);
   if (e->scale_u >= 0) gain_column[count] = place[e->scale_u], gain_sign[count++] = 1.0;
-  if (e->exposures && image == p->last_image) {
-    for (size_t k = 0; k + 1 < p->images; ++k)
-      if (exposure_u[k] >= 0) gain_column[count] = place[exposure_u[k]], gain_sign[count++] = -1.0;
-  } else if (e->exposures && exposure_u[image] >= 0) {
-    gain_column[count] = place[exposure_u[image]], gain_sign[count++] = 1.0;
+  if (e->exposures && group + 1 == p->gain_groups) {
+    for (size_t g = 0; g + 1 < p->gain_groups; ++g)
+      if (exposure_u[g] >= 0) gain_column[count] = place[exposure_u[g]], gain_sign[count++] = -1.0;
+  } else if (e->exposures && exposure_u[group] >= 0) {
+    gain_column[count] = place[exposure_u[group]], gain_sign[count++] = 1.0;
   }
-  for (int c = 0; c < 3; ++c) n->map[c].gain_count = count;
+  for (int c = 0; c < 3; ++c) { /* the same in every channel, but the balance */
+    int *column = gain_column + (size_t)c * stride;
+    double *sign = gain_sign + (size_t)c * stride;
+    if (c > 0) {
+      memcpy(column, gain_column, (size_t)count * sizeof *column);
+      memcpy(sign, gain_sign, (size_t)count * sizeof *sign);
+    }
+    n->map[c].gain_count = balance_columns(e, image, c, column, sign, count);
+  }
 }
 
 /* Channel c of row `row` (its `slots` pairs from `first` in f and grad,
@@ -822,28 +971,33 @@ static double channel_row(const block_eval *e, block_normal *n, size_t row, int 
   double sum[CF_MAX_DIM], weight_one;
   const double *dmodel;
   double model = model_value(w, e->f, e->grad, p->dim, first, slots, c, sum, &dmodel, &weight_one);
-  double linear = gain * model, chain = 1.0, log_linear = 0.0;
+  double linear = gain * model, chain = 1.0, dslope[CF_RESPONSE_MODEL_KNOTS];
   double prediction =
-      predict_channel(p->response_on, e->response, linear, n ? &chain : NULL, &log_linear);
+      predict_channel(p->response_on, e->response, linear, n ? &chain : NULL, dslope);
   double y = p->y[3 * row + (size_t)c], inv_sigma = p->inv_sigma[3 * row + (size_t)c];
   double r = (prediction - y) * inv_sigma;
-  /* a clipped channel only counts while the model predicts less */
-  int censored = fit_problem_censored_at(p, row, c, prediction, y);
-  if (censored) r = 0.0;
+  /* a clipped channel says only that the true value is at least y, its
+   * clip level: the censored likelihood's residual and slope (53) */
+  int clipped = p->flags[row] >> c & 1u;
+  double slope = 1.0;
+  if (clipped) r = fit_problem_censored_residual(r, &slope);
+  int censored = clipped && slope == 0.0;
   double rho1, root = p->sample_root ? p->sample_root[row] : 1.0;
   double rho = robust(p, r * r, &rho1), share = root * root * rho;
   if (!n || censored) return share; /* a censored residual's row is 0 */
   /* (ρ' = 1 without a loss and inside Huber's core: no square root, a
    * tenth of an M2 pass) */
   double scale = root * (rho1 == 1.0 ? 1.0 : sqrt(rho1)) * inv_sigma;
-  double u = scale * (prediction - y);
+  double u = clipped ? scale / inv_sigma * r : scale * (prediction - y);
+  scale *= slope;
   double model_scale = scale * chain * gain * weight_one, v[LOCAL_MAX];
   int m = 0;
   for (int q = 0; q < e->channel_count[c]; ++q)
     v[m++] = model_scale * dmodel[e->channel_slot[c][q]] * e->channel_factor[c][q];
-  /* ∂ prediction / ∂ log gain = γ · prediction = chain · linear */
+  /* ∂ prediction / ∂ log gain = R'(linear) · linear = chain · linear */
   if (n->map[c].gain >= 0) v[m++] = scale * chain * linear;
-  if (e->response_u >= 0) v[m++] = scale * prediction * log_linear;
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+    if (e->response_u[j] >= 0) v[m++] = scale * dslope[j];
   local_add(&n->local[c], v, u);
   return share;
 }
@@ -856,13 +1010,14 @@ static int evaluate_rows(const block_eval *e, block_normal *n, size_t begin, siz
                          double *total) {
   const fit_problem *p = e->p;
   uint32_t gain_image = UINT32_MAX;
-  double gain = 0.0, sum = 0.0;
+  double gain[3] = {0.0, 0.0, 0.0}, sum = 0.0;
   int finite = 1;
   for (size_t i = 0; finite && i < count; ++i) {
     size_t row = begin + i;
     uint32_t image = p->image[row];
     if (image != gain_image) {
-      gain = image_gain(e->log_scale, e->s->log_e[image]);
+      for (int c = 0; c < 3; ++c)
+        gain[c] = image_gain(e->log_scale, e->s->log_e[image] + e->s->log_b[3 * image + c]);
       if (n) next_image(e, n, gain_image != UINT32_MAX, image);
       gain_image = image;
     }
@@ -870,7 +1025,7 @@ static int evaluate_rows(const block_eval *e, block_normal *n, size_t begin, siz
     size_t slots = fit_problem_slot_range(p, row, &first);
     const double *w = p->weight + 3 * first;
     first -= e->first_pair; /* into f and grad */
-    for (int c = 0; c < 3; ++c) sum += channel_row(e, n, row, c, first, slots, w, gain);
+    for (int c = 0; c < 3; ++c) sum += channel_row(e, n, row, c, first, slots, w, gain[c]);
     finite = isfinite(sum); /* the shares are >= 0: one not finite leaves the sum so */
   }
   *total = sum;
@@ -894,6 +1049,31 @@ static size_t block_pairs(const fit_problem *p, size_t block, size_t *begin, siz
   size_t last_pair;
   size_t last_slots = fit_problem_slot_range(p, *begin + *n - 1, &last_pair);
   return last_pair + last_slots - *first_pair;
+}
+
+/* The response's smoothness prior (docs/model.md §5.4): the residuals
+ * (a_{j+1} − a_j) / FIT_RESPONSE_PRIOR_SD of neighbouring free slopes,
+ * their squares' sum returned and, with n, their rows in its normal
+ * equations. It holds a slope whose knot no observation reaches to its
+ * neighbour's; a power has none. */
+static double response_prior(const block_eval *e, block_normal *n) {
+  const int *place = e->s->place;
+  double w = 1.0 / FIT_RESPONSE_PRIOR_SD, sum = 0.0;
+  for (int j = 0; j + 1 < CF_RESPONSE_MODEL_KNOTS; ++j) {
+    if (e->response_u[j] < 0 || e->response_u[j + 1] < 0) continue;
+    double r = w * (e->response[j + 1] - e->response[j]);
+    sum += r * r;
+    if (!n) continue;
+    size_t a = (size_t)place[e->response_u[j]], b = (size_t)place[e->response_u[j + 1]];
+    size_t k = (size_t)n->k;
+    n->jtu[a] -= w * r;
+    n->jtu[b] += w * r;
+    n->jtj[a * k + a] += w * w;
+    n->jtj[b * k + b] += w * w;
+    n->jtj[a * k + b] -= w * w;
+    n->jtj[b * k + a] -= w * w;
+  }
+  return sum;
 }
 
 int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
@@ -920,6 +1100,7 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
   if (finite)
     finite = n ? evaluate_rows(&e, n, begin, count, &total)
                : evaluate_rows(&e, NULL, begin, count, &total);
+  if (finite && block == 0 && e.response_free) total += response_prior(&e, n);
   *cost = 0.5 * total;
   scratch_give(e.s);
   return finite && isfinite(*cost) ? CF_LSQ_EVALUATED : CF_LSQ_NOT_FINITE;
@@ -957,13 +1138,15 @@ static void predict_part(void *user, int part) {
   }
   cf_eval_batch(p->model, p->params, pairs, p->geometry + first_pair, s->f, NULL);
   uint32_t gain_image = UINT32_MAX;
-  double gain = 0.0;
+  double gain[3] = {0.0, 0.0, 0.0};
   for (size_t i = begin; i < end; ++i) {
     size_t first;
     size_t slots = fit_problem_slot_range(p, i, &first);
     if (p->image[i] != gain_image) {
       gain_image = p->image[i];
-      gain = image_gain(p->log_scale, p->log_exposures[gain_image]);
+      for (int c = 0; c < 3; ++c)
+        gain[c] = image_gain(p->log_scale, p->log_exposures[gain_image] +
+                                               p->log_balance[3 * (size_t)gain_image + (size_t)c]);
     }
     for (int c = 0; c < 3; ++c) {
       const double *dmodel;
@@ -971,7 +1154,7 @@ static void predict_part(void *user, int part) {
       double model = model_value(p->weight + 3 * first, s->f, NULL, p->dim, first - first_pair,
                                  slots, c, NULL, &dmodel, &weight_one);
       job->prediction[3 * i + (size_t)c] =
-          predict_channel(p->response_on, p->response, gain * model, NULL, NULL);
+          predict_channel(p->response_on, p->response, gain[c] * model, NULL, NULL);
       job->measured[3 * i + (size_t)c] = p->y[3 * i + (size_t)c];
     }
   }

@@ -12,6 +12,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "clayfit/model.h"
+#include "clayfit/response_model.h"
 
 /* What the solver's entry x[i] is. Model slots are fitted as they are,
  * but the albedo, fitted as its logarithm (ρ > 0 for any real clay; the
@@ -30,10 +31,16 @@ typedef enum fit_unknown_kind {
                       valley in (ρ, τ), straight in (log ρ, τ), where the
                       solver needs 3 to 5 times fewer iterations. */
   FIT_LOG_SCALE,   /* log s */
-  FIT_RESPONSE,    /* γ, the response exponent of photos whose tone curve
-                      is unknown: the prediction is (s e_k Σ f E c_i)^γ */
-  FIT_LOG_EXPOSURE /* log e_k of image `slot` (the last image's is minus
-                      the sum of the others: their mean log is 0) */
+  FIT_RESPONSE,    /* the response curve's slope a_slot at knot `slot`
+                      (clayfit/response_model.h), for photos whose tone
+                      curve is unknown: the prediction is R(s e_k Σ f E c_i) */
+  FIT_LOG_EXPOSURE, /* log e of gain group `slot`, the gain of its images
+                       (fit_problem.gain_group; per image, the group is
+                       the image); the last group's is minus the sum of the
+                       others: their mean log is 0 */
+  FIT_LOG_BALANCE   /* log b of image slot / 2's red (slot even) or blue
+                       gain against its green (--fit-gains per-image-rgb);
+                       the last image's is minus the sum of the others' */
 } fit_unknown_kind;
 
 /* Is an unknown one of the model's slots (not the scale, an exposure or
@@ -84,9 +91,21 @@ typedef struct fit_problem {
    * held at */
   double params[CF_MAX_DIM];
   double log_scale;
-  double response;       /* γ (1: linear) */
-  int response_on;       /* apply γ (it is free, or not 1) */
+  double response[CF_RESPONSE_MODEL_KNOTS]; /* R's slopes (all 1: linear) */
+  int response_on;       /* apply R (it is free, or not the identity) */
   double *log_exposures; /* images */
+  /* the gains' groups (--fit-exposures): image k's gain is its group's,
+   * gain_group[k] (images; per image the group is k, per light the images
+   * one light lights alone, fit_problem_group_gains), gain_groups in all,
+   * the first image of each group in group_image; light_of_image[k] is
+   * cf_capture_image_light_id */
+  uint32_t *gain_group, *group_image;
+  size_t gain_groups;
+  long *light_of_image;
+  /* the white balance per image and channel: log b, 3 × images (green's
+   * 0; all 0 unless fitted, fit_problem_free_balance); channel c of image
+   * k has the gain s e_k b_kc */
+  double *log_balance;
   /* the unknowns declared (fit_problem_clear_unknowns, _free_*), their
    * bounds and, after a solve, at_bound: −1/+1 for an unknown held at its
    * lower/upper bound by the data (lsq.h), else 0; num_unknowns each, in
@@ -148,7 +167,7 @@ typedef struct fit_population {
 
 /* A weighted sample of a population, for the stages that work on a
  * subsample: about `target` observations in two strata, taken evenly
- * (every stride-th) from each. The specular stratum is the 1/16 of the
+ * (fit_spread_take) from each. The specular stratum is the 1/16 of the
  * population whose half vector comes nearest the normal (for any light):
  * it holds the highlights, rare in a photo but what fixes the lobes, and
  * gets a quarter of the sample. The rest gets the other three quarters.
@@ -169,6 +188,19 @@ cf_status fit_population_of_images(const cf_capture *capture, const unsigned cha
 
 cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from, size_t target,
                           fit_sample *sample, cf_error *err);
+
+/* An even spread (Bresenham's): of `size` items met one by one, take
+ * `want` (all when want >= size) spaced evenly over the whole run, the
+ * last item included; *acc starts at 0. A whole stride (every
+ * (size / want)-th, stopped at `want`) left the end out: on DiLiGenT the
+ * last two images of 96, whose free exposures then had no observation. */
+static inline int fit_spread_take(size_t *acc, size_t want, size_t size) {
+  if (want >= size) return 1;
+  *acc += want;
+  if (*acc < size) return 0;
+  *acc -= size;
+  return 1;
+}
 void fit_sample_free(fit_sample *sample);
 
 /* Set up the problem for all observations (index NULL) or the `count`
@@ -195,7 +227,9 @@ void fit_problem_release(fit_problem *p);
 int fit_capture_has_noise(const cf_capture *capture);
 
 /* σ for every residual: the capture's noise model if it has one with some
- * noise, else one σ (> 0) for all. */
+ * noise (at the measurements; with a response curve on, the sensor's
+ * noise carried through the curve: docs/model.md (50a)), else one σ (> 0)
+ * for all. */
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma);
 
 /* Declare the unknowns (in this order: model slots, the scale, the
@@ -206,12 +240,22 @@ void fit_problem_clear_unknowns(fit_problem *p);
 void fit_problem_free_slot(fit_problem *p, int slot);
 void fit_problem_free_scale(fit_problem *p);
 void fit_problem_free_exposures(fit_problem *p);
+/* The gains' groups for fit_problem_free_exposures: one per image, or
+ * (per_light) one per light, the images one light lights alone sharing
+ * it (an image of no single light, id −1, keeps a group of its own). */
+void fit_problem_group_gains(fit_problem *p, int per_light);
+/* The white balance free: the red and blue gains of every image against
+ * its green, their mean log over the images 0 per channel (a gain per
+ * image, fit_problem_free_exposures, gives the green's). */
+void fit_problem_free_balance(fit_problem *p);
 void fit_problem_free_response(fit_problem *p);
 
-/* The response exponent's range: from a tone curve far flatter than sRGB's
- * (γ = 1/4) to one far steeper (γ = 4); 1 is linear. */
-#define FIT_RESPONSE_LOWER 0.25
-#define FIT_RESPONSE_UPPER 4.0
+/* The response's slopes all 1 (linear); is it the identity? */
+void fit_response_identity(double *slopes);
+int fit_response_is_identity(const double *slopes);
+/* The smoothness prior on the response (docs/model.md §5.4): the slopes
+ * of neighbouring knots differ by about this much at most. */
+#define FIT_RESPONSE_PRIOR_SD 0.25
 cf_status fit_problem_finish(fit_problem *p, cf_error *err);
 
 /* σ from the noise model at the current prediction instead of the
@@ -236,9 +280,9 @@ int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost
                          double *jtu);
 
 /* lsq.h's block_columns: the unknowns block `block` depends on (every
- * model slot, the scale and the response; the exposures of its images,
- * all of them when it holds the last image, whose log exposure is minus
- * their sum). */
+ * model slot, the scale and the response; the gains of its images' groups,
+ * all of them when it holds an image of the last group, whose log gain is
+ * minus their sum; the same for the white balance by image). */
 int fit_problem_block_columns(void *user, size_t block, const int **columns);
 
 /* The slots of observation i (of those used): *first and the count. */
@@ -264,6 +308,17 @@ static inline int fit_problem_censored(const fit_problem *p, size_t i, double pr
                                        double measured) {
   return fit_problem_censored_at(p, i / 3, (int)(i % 3), prediction, measured);
 }
+
+/* A clipped channel's residual in units of σ under the censored likelihood
+ * (docs/model.md (53)): with z = (μ − y)/σ, y the clip level, the channel
+ * has probability Φ(z) and the residual is t = −√(−2 log Φ(z)) (t² is its
+ * cost; t ≈ z for z ≪ 0, t → 0 for z ≫ 0). *slope = dt/dz (> 0; 0 where
+ * t is 0 to rounding: the channel is then censored outright). */
+double fit_problem_censored_residual(double z, double *slope);
+
+/* The robust loss's weight ρ'(s) of a residual whose square in units of σ
+ * is s (1 without a loss, or inside Huber's threshold). */
+double fit_problem_loss_weight(const fit_problem *p, double s);
 
 /* The prediction (with scale and exposures) and the measurement of every
  * used observation and channel at the current values: 3 × count each. */

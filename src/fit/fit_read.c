@@ -452,21 +452,35 @@ static cf_status read_residuals(const json_t *root, const json_at *at, cf_fit_re
   r->exposures = calloc(n ? n : 1, sizeof *r->exposures);
   r->image_rmse = calloc(n ? n : 1, sizeof *r->image_rmse);
   r->image_relative_rmse = calloc(n ? n : 1, sizeof *r->image_relative_rmse);
-  if (!r->exposures || !r->image_rmse || !r->image_relative_rmse)
+  r->exposure_sd = calloc(n ? n : 1, sizeof *r->exposure_sd); /* 0 in older files */
+  r->white_balance = malloc(3 * (n ? n : 1) * sizeof *r->white_balance);
+  r->white_balance_sd = calloc(3 * (n ? n : 1), sizeof *r->white_balance_sd);
+  if (!r->exposures || !r->image_rmse || !r->image_relative_rmse || !r->exposure_sd ||
+      !r->white_balance || !r->white_balance_sd)
     return cf_error_set(err, CF_ENOMEM, "%s: out of memory for %zu images", here.file, n);
   for (size_t k = 0; k < n; ++k) {
     json_at e = json_element_at(&ph, k);
     const json_t *item = json_array_get(per_image, k);
     if (!json_is_object(item))
       return json_fail(&e, err, CF_EPARSE, "expected an object, got %s", json_type_name(item));
-    static const char *const ikeys[] = {"name",     "rmse",         "relative_rmse",
-                                        "exposure", "not_radiance", NULL};
+    static const char *const ikeys[] = {
+        "name",        "rmse",          "relative_rmse",    "exposure", "not_radiance",
+        "exposure_sd", "white_balance", "white_balance_sd", NULL};
     TRY(json_check_keys(item, &e, ikeys, err));
     const char *name;
     TRY(json_get_string(item, &e, "name", 1, &name, NULL, err));
     TRY(get_nonneg(item, &e, "rmse", &r->image_rmse[k], err));
     TRY(get_nonneg(item, &e, "relative_rmse", &r->image_relative_rmse[k], err));
     TRY(json_get_number(item, &e, "exposure", 1, 1e-300, HUGE_NUMBER, &r->exposures[k], NULL, err));
+    TRY(json_get_number(item, &e, "exposure_sd", 0, 0.0, HUGE_NUMBER, &r->exposure_sd[k], NULL,
+                        err));
+    int balanced = 0; /* (1 each when absent: not fitted) */
+    r->white_balance[3 * k] = r->white_balance[3 * k + 1] = r->white_balance[3 * k + 2] = 1.0;
+    TRY(json_get_numbers(item, &e, "white_balance", 0, 3, 1e-300, HUGE_NUMBER,
+                         r->white_balance + 3 * k, &balanced, err));
+    TRY(json_get_numbers(item, &e, "white_balance_sd", balanced, 3, 0.0, HUGE_NUMBER,
+                         r->white_balance_sd + 3 * k, NULL, err));
+    r->white_balance_fitted |= balanced;
   }
   TRY(json_get_object(obj, &here, "highlight_cores", 1, &cores, NULL, err));
   json_at ch = json_member_at(&here, "highlight_cores");
@@ -618,15 +632,83 @@ static cf_status read_footprint(const json_t *root, const json_at *at, cf_fit_fi
   return json_get_string(obj, &here, "meaning", 1, &meaning, NULL, err);
 }
 
+/* A response written before the curve (clayfit 0.x up to issue 17): one
+ * exponent γ with its sd, the power x^γ, which is the curve with every
+ * slope γ and every covariance entry sd² (docs/fitting.md). */
+static cf_status read_response_exponent(const json_t *obj, const json_at *here, cf_fit_result *r,
+                                        cf_error *err) {
+  static const char *const known[] = {"value", "sd", "fitted", "meaning", NULL};
+  TRY(json_check_keys(obj, here, known, err));
+  double gamma, sd;
+  TRY(json_get_number(obj, here, "value", 1, 0.25, 4.0, &gamma, NULL, err));
+  TRY(get_nonneg(obj, here, "sd", &sd, err));
+  for (int i = 0; i < CF_RESPONSE_MODEL_KNOTS; ++i) {
+    r->response[i] = gamma;
+    for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+      r->response_covariance[i * CF_RESPONSE_MODEL_KNOTS + j] = sd * sd;
+  }
+  return CF_OK;
+}
+
+/* The slopes' covariance: K rows of K finite numbers, a diagonal >= 0. */
+static cf_status read_response_covariance(const json_t *obj, const json_at *here, cf_fit_result *r,
+                                          cf_error *err) {
+  enum { K = CF_RESPONSE_MODEL_KNOTS };
+  const json_t *rows;
+  TRY(json_get_array(obj, here, "covariance", 1, &rows, NULL, err));
+  json_at at = json_member_at(here, "covariance");
+  if (json_array_size(rows) != K)
+    return json_fail(&at, err, CF_EPARSE, "expected %d rows, got %zu", K, json_array_size(rows));
+  for (size_t a = 0; a < K; ++a) {
+    json_at row_at = json_element_at(&at, a);
+    const json_t *row = json_array_get(rows, a);
+    if (!json_is_array(row) || json_array_size(row) != K)
+      return json_fail(&row_at, err, CF_EPARSE, "expected an array of %d numbers", K);
+    for (size_t b = 0; b < K; ++b) {
+      json_at cell = json_element_at(&row_at, b);
+      TRY(json_as_number(json_array_get(row, b), &cell, a == b ? 0.0 : -HUGE_NUMBER, HUGE_NUMBER,
+                         &r->response_covariance[a * K + b], err));
+    }
+  }
+  return CF_OK;
+}
+
+/* The response curve: its model (the one this clayfit fits, at its
+ * knots), slopes and covariance; the sds and the sampled curve follow from
+ * them and are checked for their shape only. */
+static cf_status read_response_curve(const json_t *obj, const json_at *here, cf_fit_result *r,
+                                     cf_error *err) {
+  enum { K = CF_RESPONSE_MODEL_KNOTS };
+  static const char *const known[] = {"fitted",     "model", "knots",   "slopes", "slopes_sd",
+                                      "covariance", "curve", "meaning", NULL};
+  TRY(json_check_keys(obj, here, known, err));
+  static const char *const models[] = {CF_RESPONSE_MODEL_NAME, NULL};
+  int model;
+  TRY(json_get_choice(obj, here, "model", 1, models, &model, NULL, err));
+  double knots[K], sd[K];
+  TRY(json_get_numbers(obj, here, "knots", 1, K, 0.0, 1.0, knots, NULL, err));
+  for (int j = 0; j < K; ++j)
+    if (fabs(knots[j] - cf_response_model_knot(j)) > 1e-12) {
+      json_at at = json_member_at(here, "knots");
+      return json_fail(&at, err, CF_EPARSE, "knot %d is %.17g, not this model's %.17g", j, knots[j],
+                       cf_response_model_knot(j));
+    }
+  TRY(json_get_numbers(obj, here, "slopes", 1, K, CF_RESPONSE_MODEL_SLOPE_LOWER,
+                       CF_RESPONSE_MODEL_SLOPE_UPPER, r->response, NULL, err));
+  TRY(json_get_numbers(obj, here, "slopes_sd", 1, K, 0.0, HUGE_NUMBER, sd, NULL, err));
+  TRY(read_response_covariance(obj, here, r, err));
+  const json_t *curve;
+  return json_get_array(obj, here, "curve", 1, &curve, NULL, err);
+}
+
 static cf_status read_response(const json_t *root, const json_at *at, cf_fit_result *r,
                                cf_error *err) {
   const json_t *obj;
   TRY(json_get_object(root, at, "response", 1, &obj, NULL, err));
   json_at here = json_member_at(at, "response");
-  static const char *const known[] = {"value", "sd", "fitted", "meaning", NULL};
-  TRY(json_check_keys(obj, &here, known, err));
-  TRY(json_get_number(obj, &here, "value", 1, 0.25, 4.0, &r->response, NULL, err));
-  TRY(get_nonneg(obj, &here, "sd", &r->response_sd, err));
+  int is_curve = json_object_get(obj, "slopes") != NULL;
+  TRY(is_curve ? read_response_curve(obj, &here, r, err)
+               : read_response_exponent(obj, &here, r, err));
   TRY(json_get_bool(obj, &here, "fitted", 1, &r->response_fitted, NULL, err));
   const char *meaning;
   return json_get_string(obj, &here, "meaning", 1, &meaning, NULL, err);

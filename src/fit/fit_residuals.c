@@ -148,9 +148,11 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
   if (s != CF_OK) return s;
   memcpy(p->params, fit->params, sizeof p->params);
   p->log_scale = log(fit->scale);
-  p->response = fit->response_fitted ? fit->response : 1.0;
+  if (fit->response_fitted) memcpy(p->response, fit->response, sizeof p->response);
   for (size_t k = 0; k < p->images && fit->exposures; ++k)
     p->log_exposures[k] = log(fit->exposures[k]);
+  for (size_t i = 0; i < 3 * p->images && fit->white_balance; ++i)
+    p->log_balance[i] = log(fit->white_balance[i]);
   p->loss = o->loss;
   p->loss_scale = o->loss_scale;
   fit_problem_clear_unknowns(p);
@@ -164,11 +166,29 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
   return s;
 }
 
+/* Σ w log σ over p's uncensored residuals (fit_score_at's log_sigma). */
+static cf_status sum_log_sigma(const fit_problem *p, double *sum, cf_error *err) {
+  size_t n = 3 * p->count;
+  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
+  cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
+                                       : cf_error_set(err, CF_ENOMEM, "out of memory");
+  *sum = 0.0;
+  for (size_t i = 0; s == CF_OK && i < n; ++i) {
+    if (fit_problem_censored(p, i, prediction[i], measured[i])) continue;
+    double root = p->sample_root ? p->sample_root[i / 3] : 1.0;
+    *sum -= root * root * log(p->inv_sigma[i]);
+  }
+  free(prediction);
+  free(measured);
+  return s;
+}
+
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
                        const cf_fit_result *fit, double sigma, const cf_fit_options *o,
-                       double *cost, cf_fit_result *stats, cf_error *err) {
+                       double *cost, double *log_sigma, cf_fit_result *stats, cf_error *err) {
   *stats = *fit;
   stats->exposures = stats->image_rmse = stats->image_relative_rmse = NULL;
+  stats->exposure_sd = stats->white_balance = stats->white_balance_sd = NULL; /* (copied below) */
   stats->residuals = stats->censored = stats->rejected = 0;
   *cost = 0.0;
   fit_problem p;
@@ -181,11 +201,25 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
                        cf_model_info_get(fit->model)->code);
     *cost += block_cost;
   }
+  if (log_sigma) *log_sigma = 0.0;
+  if (s == CF_OK && log_sigma && fit->response_fitted && fit_capture_has_noise(capture))
+    s = sum_log_sigma(&p, log_sigma, err);
   if (s == CF_OK) s = fit_statistics(&p, o, stats, err);
   if (s == CF_OK && fit->exposures) {
     stats->exposures = malloc(fit->images * sizeof *stats->exposures);
     if (stats->exposures)
       memcpy(stats->exposures, fit->exposures, fit->images * sizeof *fit->exposures);
+    else
+      s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  }
+  double **own[3] = {&stats->exposure_sd, &stats->white_balance, &stats->white_balance_sd};
+  const double *its[3] = {fit->exposure_sd, fit->white_balance, fit->white_balance_sd};
+  for (int a = 0; s == CF_OK && a < 3; ++a) { /* the fit's per-image arrays, copied */
+    size_t count = (a == 0 ? 1 : 3) * fit->images;
+    if (!its[a]) continue;
+    *own[a] = malloc((count ? count : 1) * sizeof **own[a]);
+    if (*own[a])
+      memcpy(*own[a], its[a], count * sizeof **own[a]);
     else
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
@@ -221,7 +255,7 @@ cf_status cf_fit_evaluate(const cf_capture *capture, const cf_fit_result *fit,
   cf_status s = fit_population_of_images(capture, use_image, &population, &index, err);
   if (s == CF_OK)
     s = fit_score_at(capture, &population, fit, fit->sigma > 0.0 ? fit->sigma : 1.0, options, &cost,
-                     stats, err);
+                     NULL, stats, err);
   free(index);
   return s;
 }

@@ -26,9 +26,13 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err);
  * there (fit_statistics) into *stats, whose other fields are copied from
  * fit and which owns its per-image arrays (cf_fit_result_free). With the
  * capture's noise model σ comes from the prediction (as in the fit);
- * without one, it is `sigma` for every residual. */
+ * without one, it is `sigma` for every residual. With log_sigma non-NULL,
+ * also Σ w log σ over the uncensored residuals when σ depends on the fit
+ * beyond its prediction (the noise model carried through a fitted
+ * response curve: the Gaussian likelihood's −Σ log σ then differs between
+ * fits), else 0. */
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
                        const cf_fit_result *fit, double sigma, const cf_fit_options *o,
-                       double *cost, cf_fit_result *stats, cf_error *err);
+                       double *cost, double *log_sigma, cf_fit_result *stats, cf_error *err);
 
 #endif /* CLAYFIT_FIT_RESIDUALS_H */

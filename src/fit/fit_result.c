@@ -40,6 +40,10 @@ const char *cf_param_status_name(cf_param_status status) {
 
 void cf_fit_result_free(cf_fit_result *result) {
   free(result->exposures);
+  free(result->exposure_sd);
+  free(result->white_balance);
+  free(result->white_balance_sd);
+  result->exposure_sd = result->white_balance = result->white_balance_sd = NULL;
   free(result->image_rmse);
   free(result->image_relative_rmse);
   result->exposures = result->image_rmse = result->image_relative_rmse = NULL;

@@ -70,33 +70,20 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
   if (!p->sample_root) return CF_OK;
   size_t n = (size_t)p->num_unknowns;
   double *roots = malloc((p->count ? p->count : 1) * sizeof *roots);
-  double *b = malloc(n * n * sizeof *b), *bc = malloc(n * n * sizeof *bc);
-  cf_status s = roots && b && bc ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  double *b = malloc(n * n * sizeof *b);
+  cf_status s = roots && b ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) { /* B: each row weighed by w instead of √w */
     memcpy(roots, p->sample_root, p->count * sizeof *roots);
     for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = roots[i] * roots[i];
     s = fit_normal_equations(p, threads, b, NULL, NULL, err);
     memcpy(p->sample_root, roots, p->count * sizeof *roots);
   }
-  if (s == CF_OK) { /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */
-    for (size_t i = 0; i < n; ++i)
-      for (size_t j = 0; j < n; ++j) {
-        double sum = 0.0;
-        for (size_t k = 0; k < n; ++k) sum += b[i * n + k] * covariance[k * n + j];
-        bc[i * n + j] = sum;
-      }
-    for (size_t i = 0; i < n; ++i)
-      for (size_t j = 0; j < n; ++j) {
-        double sum = 0.0;
-        for (size_t k = 0; k < n; ++k) sum += covariance[i * n + k] * bc[k * n + j];
-        b[i * n + j] = sum;
-      }
-    for (size_t i = 0; i < n; ++i) /* symmetric to the last bit */
-      for (size_t j = 0; j < n; ++j) covariance[i * n + j] = 0.5 * (b[i * n + j] + b[j * n + i]);
-  }
+  /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */
+  if (s == CF_OK && !cf_sandwich((int)n, covariance, b))
+    s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) memcpy(covariance, b, n * n * sizeof *b);
   free(roots);
   free(b);
-  free(bc);
   return s;
 }
 
@@ -155,6 +142,17 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
         *found = 1;
       }
   }
+  int gains = 0;
+  for (int u = 0; u < p->num_unknowns; ++u)
+    gains |= p->unknowns[u].kind == FIT_LOG_EXPOSURE || p->unknowns[u].kind == FIT_LOG_BALANCE;
+  if (!*found && gains && values[weakest] > 1e-10 * largest)
+    /* the material is constrained: the deficiency is the gains' (holding
+     * a model slot would not mend it; cf_fit_check_gains names the images
+     * at the start) */
+    return cf_error_set(err, CF_ENUMERIC,
+                        "the gains (--fit-exposures, --fit-gains) or the scale are not "
+                        "constrained at the solution though the material is: some image's "
+                        "observations fix only its gain times the material");
   if (!*found) { /* the solver saw a deficiency: name the weakest direction's largest part */
     int best = 0;
     for (int k = 1; k < m; ++k)
@@ -163,4 +161,158 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
     *found = 1;
   }
   return CF_OK;
+}
+
+/* ---- residuals correlated within a lossy codec's blocks ---- */
+
+typedef struct tile_row {
+  uint64_t tile;
+  size_t row;
+} tile_row;
+
+static int by_tile(const void *a, const void *b) {
+  const tile_row *x = a, *y = b;
+  return x->tile < y->tile ? -1 : x->tile > y->tile;
+}
+
+/* Observation i's tile: its image and the tile_px × tile_px square of
+ * pixels (from the image's corner, as a codec's blocks) it lies in. */
+static uint64_t tile_key(const fit_problem *p, size_t i, int tile_px) {
+  size_t o = p->index ? p->index[i] : i;
+  uint64_t x = (uint64_t)fmax(0.0, p->obs->pixel[2 * o] / tile_px);
+  uint64_t y = (uint64_t)fmax(0.0, p->obs->pixel[2 * o + 1] / tile_px);
+  return (uint64_t)p->image[i] << 40 | (y & 0xfffffu) << 20 | (x & 0xfffffu);
+}
+
+/* Each used observation's tile as a number 0 .. *tiles − 1. */
+static cf_status number_tiles(const fit_problem *p, int tile_px, size_t *tile, size_t *tiles,
+                              cf_error *err) {
+  size_t n = p->count;
+  tile_row *rows = malloc((n ? n : 1) * sizeof *rows);
+  if (!rows) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t i = 0; i < n; ++i) rows[i] = (tile_row){tile_key(p, i, tile_px), i};
+  qsort(rows, n, sizeof *rows, by_tile);
+  *tiles = 0;
+  for (size_t a = 0; a < n; ++a) {
+    if (a > 0 && rows[a].tile != rows[a - 1].tile) ++*tiles;
+    tile[rows[a].row] = *tiles;
+  }
+  if (n > 0) ++*tiles;
+  free(rows);
+  return CF_OK;
+}
+
+/* Each residual's part in the score, ψ = w ρ'(e²) e / σ with e the
+ * residual in units of σ and w the sample's weight (as the normal
+ * equations weigh it; a clipped channel's e and its slope from the
+ * censored likelihood, fit_problem_censored_residual); 0 where censored
+ * outright. Times ∂μ/∂x it is the residual's
+ * part in the score's component x. */
+static void score_parts(const fit_problem *p, const double *prediction, const double *measured,
+                        double *psi) {
+  for (size_t i = 0; i < 3 * p->count; ++i) {
+    double e = (measured[i] - prediction[i]) * p->inv_sigma[i];
+    double w = p->sample_root ? p->sample_root[i / 3] * p->sample_root[i / 3] : 1.0;
+    double slope = 1.0;
+    if (p->flags[i / 3] >> (i % 3) & 1u) /* clipped: the censored likelihood's t */
+      e = -fit_problem_censored_residual(-e, &slope);
+    psi[i] = slope == 0.0 || !isfinite(e)
+                 ? 0.0
+                 : w * fit_problem_loss_weight(p, e * e) * e * slope * p->inv_sigma[i];
+  }
+}
+
+/* Each tile's score: g[t × m + u] = Σ_{i in tile t} ψ_i ∂μ_i/∂x_u for the
+ * unknowns u not at a bound, by forward differences (backward at the upper
+ * bound) of the prediction; the problem's values are left as they were. */
+static cf_status tile_scores(fit_problem *p, const size_t *tile, const double *psi,
+                             const double *base, double *g, cf_error *err) {
+  const int m = p->num_unknowns;
+  const size_t n = 3 * p->count;
+  double *x = malloc((size_t)m * sizeof *x), *moved = malloc((size_t)m * sizeof *moved);
+  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
+  /* the values as they are (x → values → x is exact only to rounding) */
+  double params[CF_MAX_DIM], log_scale = p->log_scale, response[CF_RESPONSE_MODEL_KNOTS];
+  double *exposures = malloc((p->images ? p->images : 1) * sizeof *exposures);
+  double *balance = malloc(3 * (p->images ? p->images : 1) * sizeof *balance);
+  cf_status s = x && moved && prediction && measured && exposures && balance
+                    ? CF_OK
+                    : cf_error_set(err, CF_ENOMEM, "out of memory");
+  memcpy(params, p->params, sizeof params);
+  memcpy(response, p->response, sizeof response);
+  if (s == CF_OK) {
+    memcpy(exposures, p->log_exposures, p->images * sizeof *exposures);
+    memcpy(balance, p->log_balance, 3 * p->images * sizeof *balance);
+    fit_problem_get_x(p, x);
+  }
+  for (int u = 0; s == CF_OK && u < m; ++u) {
+    if (p->at_bound[u]) continue;
+    double h = 1e-6 * fmax(1.0, fabs(x[u]));
+    if (x[u] + h > p->upper[u]) h = -h;
+    memcpy(moved, x, (size_t)m * sizeof *x);
+    moved[u] += h;
+    fit_problem_set_x(p, moved);
+    s = fit_problem_predict(p, prediction, measured, err);
+    for (size_t i = 0; s == CF_OK && i < n; ++i)
+      g[tile[i / 3] * (size_t)m + (size_t)u] += psi[i] * (prediction[i] - base[i]) / h;
+  }
+  if (x && moved && prediction && measured && exposures && balance) { /* set_x may have run */
+    memcpy(p->params, params, sizeof params);
+    p->log_scale = log_scale;
+    memcpy(p->response, response, sizeof response);
+    memcpy(p->log_exposures, exposures, p->images * sizeof *exposures);
+    memcpy(p->log_balance, balance, 3 * p->images * sizeof *balance);
+  }
+  free(exposures);
+  free(balance);
+  free(x);
+  free(moved);
+  free(prediction);
+  free(measured);
+  return s;
+}
+
+/* covariance ← A⁻¹ B A⁻¹ with B = Σ_t g_t g_tᵀ. */
+static cf_status tile_sandwich(int m, const double *g, size_t tiles, double *covariance,
+                               cf_error *err) {
+  size_t mm = (size_t)m * (size_t)m;
+  double *b = calloc(mm, sizeof *b);
+  if (!b) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t t = 0; t < tiles; ++t)
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j)
+        b[i * m + j] += g[t * (size_t)m + (size_t)i] * g[t * (size_t)m + (size_t)j];
+  int done = cf_sandwich(m, covariance, b);
+  if (done) memcpy(covariance, b, mm * sizeof *b);
+  free(b);
+  return done ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+}
+
+cf_status fit_tile_covariance(fit_problem *p, int tile_px, double *covariance, int *applied,
+                              cf_error *err) {
+  const size_t n = p->count, m = (size_t)p->num_unknowns;
+  *applied = 0;
+  if (n == 0 || m == 0) return CF_OK;
+  size_t *tile = malloc(n * sizeof *tile), tiles = 0;
+  double *base = malloc(3 * n * sizeof *base), *measured = malloc(3 * n * sizeof *measured);
+  double *psi = malloc(3 * n * sizeof *psi), *g = NULL;
+  cf_status s = tile && base && measured && psi ? number_tiles(p, tile_px, tile, &tiles, err)
+                                                : cf_error_set(err, CF_ENOMEM, "out of memory");
+  /* B from fewer tiles than a few per unknown is singular or nearly */
+  const int enough = tiles >= FIT_TILES_PER_UNKNOWN * m;
+  if (s == CF_OK && enough && !(g = calloc(tiles * m, sizeof *g)))
+    s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK && enough) s = fit_problem_predict(p, base, measured, err);
+  if (s == CF_OK && enough) {
+    score_parts(p, base, measured, psi);
+    s = tile_scores(p, tile, psi, base, g, err);
+  }
+  if (s == CF_OK && enough) s = tile_sandwich((int)m, g, tiles, covariance, err);
+  *applied = s == CF_OK && enough;
+  free(tile);
+  free(base);
+  free(measured);
+  free(psi);
+  free(g);
+  return s;
 }

@@ -35,4 +35,20 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
 cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double *covariance,
                                  int rank_deficient, fit_plan *plan, int *found, cf_error *err);
 
+/* The covariance when residuals are correlated within tile_px × tile_px
+ * squares of pixels (a JPEG's blocks): the cluster-robust sandwich
+ * A⁻¹ B A⁻¹ with B = Σ_tiles g_t g_tᵀ, g_t the tile's part in the score
+ * (its residuals in units of σ, weighed as the normal equations weigh
+ * them, times ∂μ/∂x by forward differences). Independent residuals of
+ * variance σ² give B ≈ A. `covariance` holds A⁻¹ (fit_free_covariance)
+ * on entry and the sandwich on return (*applied 1), or is left as it was
+ * when the observations fall in fewer than FIT_TILES_PER_UNKNOWN tiles per
+ * unknown (*applied 0); the problem's values are kept. */
+cf_status fit_tile_covariance(fit_problem *p, int tile_px, double *covariance, int *applied,
+                              cf_error *err);
+#define FIT_TILES_PER_UNKNOWN 4
+
+/* The tiles of a JPEG capture: its 4:2:0 coding unit, 16 × 16 pixels. */
+#define FIT_JPEG_TILE_PX 16
+
 #endif /* CLAYFIT_FIT_UNCERTAINTY_H */

@@ -84,13 +84,16 @@ static void parameter_table(FILE *f, const report_data *d) {
   if (r->scale_fitted)
     fprintf(f,
             "<tr><td class=\"l\">scale</td><td>%.6g</td><td>&plusmn; %.3g</td>"
-            "<td class=\"l\">1</td><td class=\"l\">fitted (relative radiometry)</td></tr>\n",
-            r->scale, r->scale_sd);
-  if (r->response_fitted)
+            "<td class=\"l\">1</td><td class=\"l\">fitted (%s)</td></tr>\n",
+            r->scale, r->scale_sd,
+            r->response_fitted ? "the level: an unknown tone curve" : "relative radiometry");
+  for (int j = 0; r->response_fitted && j < CF_RESPONSE_MODEL_KNOTS; ++j)
     fprintf(f,
-            "<tr><td class=\"l\">response exponent</td><td>%.6g</td><td>&plusmn; %.3g</td>"
-            "<td class=\"l\">1</td><td class=\"l\">fitted (unknown tone curve)</td></tr>\n",
-            r->response, r->response_sd);
+            "<tr><td class=\"l\">response slope at x = %s%g</td><td>%.6g</td>"
+            "<td>&plusmn; %.3g</td><td class=\"l\">1</td><td class=\"l\">fitted (unknown tone "
+            "curve)</td></tr>\n",
+            j ? "1/" : "", 1.0 / cf_response_model_knot(j), r->response[j],
+            sqrt(fmax(0.0, r->response_covariance[j * (CF_RESPONSE_MODEL_KNOTS + 1)])));
   fputs("</table>\n<p>Not constrained by this capture (held at their defaults): ", f);
   if (!unconstrained) fputs("none", f);
   for (int k = 0, first = 1; k < m->dim; ++k) {
@@ -124,6 +127,36 @@ static void residual_summary(FILE *f, const report_data *d) {
             number_at(cores, "radius_px"), 100.0 * number_at(cores, "relative_rmse"),
             100.0 * number_at(json_object_get(cores, "rest"), "relative_rmse"));
   fputs("</p>\n", f);
+}
+
+/* The fitted per-image gains e_k ± sd (--fit-exposures), six images to a
+ * row; nothing when they were not fitted (every sd 0). */
+static void gains_table(FILE *f, const report_data *d) {
+  const cf_fit_result *r = &d->fit->result;
+  enum { PER_ROW = 6 };
+  double worst = 0.0;
+  for (size_t k = 0; r->exposure_sd && k < r->images; ++k)
+    worst = fmax(worst, r->exposure_sd[k] / r->exposures[k]);
+  if (!(worst > 0.0) || r->images != d->images) return;
+  fprintf(f,
+          "<h2>Per-image gains</h2>\n<p>Each image's gain e<sub>k</sub> (its exposure or "
+          "light intensity relative to the capture's, fitted with <code>--fit-exposures</code>; "
+          "their mean log is 0) &plusmn; its standard deviation (at most %.2g %%); with "
+          "<code>--fit-gains per-image-rgb</code> also its white balance, red's and blue's "
+          "gains against green's.</p>\n<table>",
+          100.0 * worst);
+  for (size_t k = 0; k < r->images; ++k) {
+    if (k % PER_ROW == 0) fputs(k ? "</tr>\n<tr>" : "<tr>", f);
+    fputs("<td class=\"l\">", f);
+    html(f, cf_capture_image_at(d->capture, k)->name);
+    fprintf(f, "</td><td>%.4f &plusmn; %.4f", r->exposures[k], r->exposure_sd[k]);
+    if (r->white_balance_fitted && r->white_balance && r->white_balance_sd)
+      fprintf(f, "<br>red %.4f &plusmn; %.4f, blue %.4f &plusmn; %.4f", r->white_balance[3 * k],
+              r->white_balance_sd[3 * k], r->white_balance[3 * k + 2],
+              r->white_balance_sd[3 * k + 2]);
+    fputs("</td>", f);
+  }
+  fputs("</tr></table>\n", f);
 }
 
 static void choice_table(FILE *f, const report_data *d) {
@@ -178,6 +211,10 @@ static void plots_and_speed(FILE *f, const report_data *d) {
   for (int p = 0; p < REPORT_PLOT_COUNT; ++p)
     fprintf(f, "<img src=\"%s\" alt=\"%s\" width=\"560\" height=\"340\">\n", report_plots[p].file,
             report_plots[p].title);
+  if (d->fit->result.response_fitted)
+    fprintf(f, "<a href=\"%s\"><img src=\"%s\" alt=\"%s\" width=\"560\" height=\"340\"></a>\n",
+            report_response_plot_info.file, report_response_plot_info.file,
+            report_response_plot_info.title);
   fputs("</div>\n<h2>Speed</h2>\n", f);
   const json_t *timing = d->doc ? json_object_get(d->doc, "timing") : NULL;
   const json_t *solver = d->doc ? json_object_get(d->doc, "solver") : NULL;
@@ -292,6 +329,7 @@ cf_status report_write_html(const report_data *d, const char *dir, const char *f
   head(f, d, fit_path, version);
   parameter_table(f, d);
   residual_summary(f, d);
+  gains_table(f, d);
   choice_table(f, d);
   plots_and_speed(f, d);
   image_rows(f, d, image_files);

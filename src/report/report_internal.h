@@ -60,6 +60,11 @@ typedef struct report_plot {
 } report_plot;
 extern const report_plot report_plots[REPORT_PLOT_COUNT];
 cf_status report_write_plots(const report_data *d, const char *dir, cf_error *err);
+/* The fitted camera response curve with its ±2 sd band
+ * (report_response.c): written, and listed in report.json and on the page,
+ * only when the fit recovered a response (an unknown tone curve). */
+extern const report_plot report_response_plot_info;
+cf_status report_response_plot(const report_data *d, const char *dir, cf_error *err);
 
 /* report.json and index.html. image_files: 3 names per image. */
 cf_status report_write_json(const report_data *d, const char *dir, const char *fit_path,

@@ -58,6 +58,9 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
   }
   for (int p = 0; p < REPORT_PLOT_COUNT; ++p)
     json_object_set_new(plots, report_plots[p].key, json_string(report_plots[p].file));
+  if (d->fit->result.response_fitted)
+    json_object_set_new(plots, report_response_plot_info.key,
+                        json_string(report_response_plot_info.file));
   char created[32];
   time_t now = time(NULL);
   struct tm utc;

@@ -236,5 +236,6 @@ cf_status report_write_plots(const report_data *d, const char *dir, cf_error *er
   if (s == CF_OK) s = lobe_plot(d, dir, err);
   if (s == CF_OK) s = convergence_plot(d, dir, err);
   if (s == CF_OK) s = timing_plot(d, dir, err);
+  if (s == CF_OK) s = report_response_plot(d, dir, err);
   return s;
 }

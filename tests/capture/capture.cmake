@@ -1,6 +1,10 @@
 # Tests of the capture files, the loader and synthetic captures.
 clayfit_c_test(test_capture_synth SOURCES capture/test_capture_synth.c
                LIBS clayfit_capture LABELS capture)
+# synth --response (each curve's codes decode to the linear render) and
+# --format jpg with EXIF exposures.
+clayfit_c_test(test_synth_response SOURCES capture/test_synth_response.c
+               LIBS clayfit_capture LABELS capture)
 clayfit_c_test(test_capture_file SOURCES capture/test_capture_file.c
                LIBS clayfit_capture LABELS capture)
 target_include_directories(test_capture_file PRIVATE ${PROJECT_SOURCE_DIR}/src)
@@ -73,6 +77,21 @@ add_test(NAME cli_inspect_json
                  --expect "len(doc['overlays']) == 3 and doc['camera'] == 'colmap'"
                  -- ${CLAYFIT} --quiet inspect --json -o ${SMALL}/overlays ${SMALL}/capture.json)
 set_tests_properties(cli_inspect_json PROPERTIES LABELS "cli;capture" FIXTURES_REQUIRED synth_small)
+# synth --format jpg --response: what it writes is valid, and its bad options
+set(SYNTH_JPG ${CMAKE_CURRENT_BINARY_DIR}/cli_synth_jpg)
+add_test(NAME cli_synth_jpg COMMAND ${CLAYFIT} --quiet synth -o ${SYNTH_JPG} --images 2
+         --size 96x72 --format jpg --quality 80 --exif-exposures --response filmic)
+set_tests_properties(cli_synth_jpg PROPERTIES LABELS "cli;capture" FIXTURES_SETUP synth_jpg)
+add_test(NAME cli_synth_jpg_valid
+         COMMAND ${VALIDATE} ${SYNTH_JPG}/capture.json=${SCHEMA}/capture.schema.json
+                 ${SYNTH_JPG}/truth.json=${SCHEMA}/truth.schema.json)
+set_tests_properties(cli_synth_jpg_valid PROPERTIES LABELS "cli;capture"
+                     FIXTURES_REQUIRED synth_jpg)
+clayfit_cli_test(error_synth_response --exit 2
+  --stderr "--response: 'log' is not a response curve \\(linear, srgb, gamma2.2, filmic\\)" --
+  ${CLAYFIT} synth -o ${CMAKE_CURRENT_BINARY_DIR}/never --response log)
+clayfit_cli_test(error_synth_exif_png --exit 2 --stderr "EXIF exposures need the jpg format" --
+  ${CLAYFIT} synth -o ${CMAKE_CURRENT_BINARY_DIR}/never --exif-exposures)
 clayfit_cli_test(error_synth_out_of_range --exit 2
   --stderr "parameter film_f0 of model clay is 0.5, outside its range" --
   ${CLAYFIT} synth -o ${CMAKE_CURRENT_BINARY_DIR}/never --param film_f0=0.5)

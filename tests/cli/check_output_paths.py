@@ -3,8 +3,8 @@
 
 usage: check_output_paths.py CLAYFIT COMMAND WORKDIR
 
-COMMAND is fit, report, export, synth, inspect or bench (bench fit's --work
-and --json). Each case runs the command with valid inputs and one bad
+COMMAND is fit, report, export, synth, inspect, lights or bench (bench fit's
+--work and --json). Each case runs the command with valid inputs and one bad
 output path and checks: exit status 2, the message (the option, the path
 and why), and that nothing was done first: stderr is that one line, with no
 progress line of loading, fitting or rendering (the commands run without
@@ -16,8 +16,10 @@ for root too.
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
+import zlib
 
 FOLDER_CASES = [
     ("", r"^-o: the path is empty$"),
@@ -47,6 +49,29 @@ def run(command, cwd):
     return subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=600)
 
 
+def write_grey_png(path, width, height, grey):
+    """An 8-bit grey PNG of grey(x, y) in 0..255, by hand (no imaging module)."""
+    rows = b"".join(b"\0" + bytes(grey(x, y) for x in range(width)) for y in range(height))
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data +
+                struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def write_chrome_ball(work):
+    """A 64x48 photo of a dark ball (radius 16) with one clipped highlight, and its mask."""
+    def inside(x, y, r):
+        return (x + 0.5 - 32) ** 2 + (y + 0.5 - 24) ** 2 <= r * r
+    write_grey_png(os.path.join(work, "chrome.png"), 64, 48,
+                   lambda x, y: 255 if (x - 36) ** 2 + (y - 20) ** 2 <= 2 else
+                   (20 if inside(x, y, 16) else 90))
+    write_grey_png(os.path.join(work, "chrome_mask.png"), 64, 48,
+                   lambda x, y: 255 if inside(x, y, 16) else 0)
+
+
 def setup(clayfit, work):
     """A tiny capture and its fit, a regular file, a folder, a read-only folder."""
     shutil.rmtree(work, ignore_errors=True)
@@ -56,6 +81,7 @@ def setup(clayfit, work):
     os.chmod(os.path.join(work, "ro"), 0o555)
     with open(os.path.join(work, "somefile"), "w", encoding="utf-8") as f:
         f.write("a file\n")
+    write_chrome_ball(work)
     for command in (["synth", "-o", "capture", "--model", "M0", "--images", "3", "--size", "64x48",
                      "--format", "exr", "--supersample", "1"],
                     ["fit", "capture/capture.json", "-o", "fit", "--model", "M0",
@@ -77,6 +103,8 @@ def commands(clayfit, name):
         "synth": (lambda o: [clayfit, "synth", "-o", o, "--images", "2", "--size", "32x24",
                              "--supersample", "1"], "-o", INTO_CASES),
         "inspect": (lambda o: [clayfit, "inspect", capture, "-o", o], "-o", INTO_CASES),
+        "lights": (lambda o: [clayfit, "lights", "chrome.png", "--mask", "chrome_mask.png", "-o", o],
+                   "-o", INTO_CASES),
         "bench-work": (lambda o: [clayfit, "bench", "fit", "--sizes", "2x48x36", "--budgets", "100", "--model", "M0",
                                   "--work", o], "--work", INTO_CASES),
         "bench-json": (lambda o: [clayfit, "bench", "fit", "--sizes", "2x48x36", "--budgets", "100", "--model", "M0",
@@ -87,7 +115,8 @@ def commands(clayfit, name):
 
 # the good path of each: missing parent folders are created (not for a file)
 GOOD = {"fit": "new/parents/fit", "report": "new/parents/report", "export": "adir/preset.json",
-        "synth": "new/parents/synth", "inspect": "new/parents/overlays"}
+        "synth": "new/parents/synth", "inspect": "new/parents/overlays",
+        "lights": "new/parents/lights"}
 
 
 def main():

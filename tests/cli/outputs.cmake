@@ -5,7 +5,7 @@
 # folder of a file, /proc, a read-only folder when not root) is refused
 # before any loading, fitting or rendering: exit 2, the option, the path and
 # the reason (tests/cli/check_output_paths.py; one test per command).
-foreach(command fit report export synth inspect bench-work bench-json)
+foreach(command fit report export synth inspect lights bench-work bench-json)
   add_test(NAME cli_output_path_${command}
            COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/cli/check_output_paths.py
                    ${CLAYFIT} ${command} ${CMAKE_CURRENT_BINARY_DIR}/cli_output_paths/${command})

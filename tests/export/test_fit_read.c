@@ -3,7 +3,9 @@
  * at a bound, an unconstrained slot; M0 with derived null); a broken
  * fit.json is refused with the file and the JSON path in the message. The
  * capture is recorded relative to fit.json's folder and found from there;
- * an older fit.json's path, relative to the current folder, still is. */
+ * an older fit.json's path, relative to the current folder, still is. The
+ * response curve's slopes and covariance read back as written; an older
+ * fit.json's response exponent γ reads as the curve with every slope γ. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -11,6 +13,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <jansson.h>
 
 #include "clayfit/fit.h"
 #include "clayfit/fit_file.h"
@@ -54,8 +58,13 @@ static void make_result(cf_fit_result *r, cf_model_id model, size_t images) {
   r->scale = 1.25;
   r->scale_sd = 0.003;
   r->scale_fitted = 1;
-  r->response = 1.5;
-  r->response_sd = 0.002;
+  const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.45, 0.5, 0.6, 0.8, 1.0, 1.1};
+  for (int i = 0; i < CF_RESPONSE_MODEL_KNOTS; ++i) {
+    r->response[i] = slopes[i];
+    for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+      r->response_covariance[i * CF_RESPONSE_MODEL_KNOTS + j] =
+          i == j ? 1e-4 * (i + 1) : -1e-6 * (i + j);
+  }
   r->response_fitted = 1;
   r->images = images;
   r->exposures = calloc(images, sizeof(double));
@@ -136,7 +145,10 @@ static void round_trip(const cf_capture *capture, const char *dir, cf_model_id m
     CHECK(g->correlation[a] == r.correlation[a], "%s: correlation[%d]", m->code, a);
   for (int a = 0; a < r.free_count; ++a) CHECK(g->free_slots[a] == r.free_slots[a], "free_slots");
   CHECK(g->scale == r.scale && g->scale_sd == r.scale_sd && g->scale_fitted == 1, "scale");
-  CHECK(g->response == r.response && g->response_sd == r.response_sd && g->response_fitted == 1,
+  CHECK(memcmp(g->response, r.response, sizeof r.response) == 0 &&
+            memcmp(g->response_covariance, r.response_covariance, sizeof r.response_covariance) ==
+                0 &&
+            g->response_fitted == 1,
         "response");
   CHECK(g->images == r.images, "images %zu", g->images);
   for (size_t k = 0; k < r.images && k < g->images; ++k)
@@ -269,6 +281,35 @@ static void older_fit(const char *dir) {
   CHECK(chdir(cwd) == 0, "chdir %s", cwd);
 }
 
+/* fit.json's response as clayfit wrote it before the curve: one exponent
+ * γ ± sd, read as the curve with every slope γ and every covariance entry
+ * sd² (the power x^γ, its sd fully correlated across the knots). */
+static void older_response(const char *dir) {
+  char in[600], out[600];
+  snprintf(in, sizeof in, "%s/M2.fit.json", dir);
+  snprintf(out, sizeof out, "%s/old_response.fit.json", dir);
+  json_t *root = json_load_file(in, 0, NULL);
+  CHECK(root != NULL, "could not load %s", in);
+  if (!root) return;
+  json_object_set_new(root, "response",
+                      json_pack("{s:f, s:f, s:b, s:s}", "value", 1.5, "sd", 0.002, "fitted", 1,
+                                "meaning", "the response exponent"));
+  CHECK(json_dump_file(root, out, JSON_REAL_PRECISION(17)) == 0, "could not write %s", out);
+  json_decref(root);
+  cf_fit_file f;
+  cf_error err = {0};
+  CHECK(cf_fit_file_read(out, &f, &err) == CF_OK, "%s", err.message);
+  int power = f.result.response_fitted == 1;
+  for (int i = 0; i < CF_RESPONSE_MODEL_KNOTS; ++i) {
+    power = power && f.result.response[i] == 1.5;
+    for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
+      power = power && fabs(f.result.response_covariance[i * CF_RESPONSE_MODEL_KNOTS + j] -
+                            0.002 * 0.002) < 1e-18;
+  }
+  CHECK(power, "the exponent 1.5 +- 0.002 did not read as the power curve");
+  cf_fit_file_free(&f);
+}
+
 int main(void) {
   char dir[64];
   if (!fit_test_make_dir(dir, sizeof dir)) return 1;
@@ -289,6 +330,7 @@ int main(void) {
   CHECK(mkdir(old, 0777) == 0, "mkdir %s", old);
   relative_paths(dir);
   older_fit(dir);
+  older_response(dir);
 
   refused(dir, "\"clayfit_fit\": 1", "\"clayfit_fit\": \"1\"", "clayfit_fit: expected an integer");
   refused(dir, "\"scale\": {", "\"scale\": {\"bogus\": 1, ", "scale: unknown key 'bogus'");
@@ -302,6 +344,11 @@ int main(void) {
           "sample.sampling: 'random' is not one of");
   refused(dir, "\"observations\": 1000", "\"observations\": 9000",
           "sample.observations: 9000: expected 1 to 8999");
+  refused(dir, "\"model\": \"log_log_slope_spline\"", "\"model\": \"emor\"",
+          "response.model: 'emor' is not one of");
+  refused(dir, "\"slopes\": [\n      0.45", "\"slopes\": [\n      0.05", "response.slopes");
+  refused(dir, "\"knots\": [\n      1.0", "\"knots\": [\n      0.5",
+          "response.knots: knot 0 is 0.5");
   cf_fit_file f;
   cf_error err = {0};
   CHECK(cf_fit_file_read("/no/such/fit.json", &f, &err) == CF_ENOTFOUND, "missing file: %s",

@@ -29,7 +29,8 @@ clayfit_fit_cli_test(fit_auto --schema ${SCHEMA}/fit.schema.json
   --expect "len(doc['residuals']['per_image']) == 8"
   --expect "doc['timing']['choice_s'] > 0"
   --expect "doc['footprint']['mode'] == 'centre' and doc['footprint']['observations'] == 0"
-  --expect "doc['response'] == {'value': 1.0, 'sd': 0.0, 'fitted': False, 'meaning': doc['response']['meaning']}"
+  --expect "not doc['response']['fitted'] and doc['response']['slopes'] == [1.0] * 6"
+  --expect "all(abs(c['linear'] - c['decoded']) < 1e-12 and c['linear_sd'] == 0 for c in doc['response']['curve'])"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/auto --footprint centre)
 clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
   --json-file ${FIT_SMALL}/hold/fit.json
@@ -59,7 +60,9 @@ clayfit_fit_cli_test(fit_out_of_iterations --schema ${SCHEMA}/fit.schema.json
      --footprint centre --max-iterations 1 --no-multistart)
 # An unknown tone curve: the same capture's linear EXR values decoded as
 # stored^1.5 (encoding "gamma", gamma 1.5) with tone_curve "unknown": the
-# fitted response exponent is 1.5 and the material unchanged.
+# fitted response curve is the power 1.5 (every slope 1.5) and the material
+# unchanged. An unknown tone curve leaves the level to the interface F0
+# (docs/model.md §5.4), held here at the truth's 0.05.
 add_test(NAME cli_fit_gamma_capture
          COMMAND ${CLAYFIT_PYTHON} -c
          "import json, sys; d = json.load(open(sys.argv[1])); d['colour'] = {'encoding': 'gamma', 'gamma': 1.5, 'tone_curve': 'unknown'}; json.dump(d, open(sys.argv[2], 'w'), indent=2)"
@@ -68,13 +71,48 @@ set_tests_properties(cli_fit_gamma_capture PROPERTIES LABELS "cli;fit" FIXTURES_
                      FIXTURES_SETUP fit_gamma)
 clayfit_fit_cli_test(fit_response --schema ${SCHEMA}/fit.schema.json
   --json-file ${FIT_SMALL}/gamma/fit.json
-  --expect "doc['response']['fitted'] and abs(doc['response']['value'] - 1.5) < 1e-4"
-  --expect "0 < doc['response']['sd'] < 0.01"
+  --expect "doc['response']['fitted'] and max(abs(a - 1.5) for a in doc['response']['slopes']) < 1e-4"
+  --expect "0 < doc['response']['slopes_sd'][0] < 0.01"
+  --expect "all(c['linear_sd'] < 0.01 * c['linear'] for c in doc['response']['curve'] if c['decoded'] > 0.01)"
+  --expect "max(abs(c['linear'] - c['decoded'] ** (1 / 1.5)) for c in doc['response']['curve']) < 1e-4"
   --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
-  --expect "abs(doc['params']['f0']['value'] - 0.05) < 1e-4"
+  --expect "doc['params']['f0']['value'] == 0.05 and doc['scale']['fitted']"
+  --expect "abs(doc['scale']['value'] - 1) < 1e-4"
   --expect "max(abs(a - b) for a, b in zip(doc['params']['albedo']['value'], [0.6, 0.4, 0.3])) < 1e-4"
-  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/gamma.json -o ${FIT_SMALL}/gamma --model M2 --footprint centre)
-set_tests_properties(cli_fit_response PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma")
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/gamma.json -o ${FIT_SMALL}/gamma --model M2 --footprint centre
+     --hold f0=0.05)
+set_tests_properties(cli_fit_response PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma"
+                     FIXTURES_SETUP fit_gamma_fitted)
+# M0 has no interface F0 to fix the level an unknown tone curve leaves
+# open: the fit says its albedo is in relative units.
+clayfit_fit_cli_test(fit_response_no_interface --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/gamma_m0/fit.json
+  --expect "doc['response']['fitted'] and not doc['scale']['fitted']"
+  --expect "any('tone curve is unknown and M0' in w and 'relative units' in w for w in doc['warnings'])"
+  -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/gamma.json -o ${FIT_SMALL}/gamma_m0 --model M0 --footprint centre)
+set_tests_properties(cli_fit_response_no_interface PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma")
+# The report of a fit with a response curve draws the curve with its band.
+clayfit_fit_cli_test(report_response --schema ${SCHEMA}/report.schema.json
+  --json-file ${FIT_SMALL}/gamma_report/report.json
+  --expect "doc['plots']['response'] == 'plots/response.svg'"
+  --expect "'R^-1(y)' in open('${FIT_SMALL}/gamma_report/plots/response.svg').read()"
+  --expect "'plots/response.svg' in open('${FIT_SMALL}/gamma_report/index.html').read()"
+  -- ${CLAYFIT} --quiet report ${FIT_SMALL}/gamma/fit.json -o ${FIT_SMALL}/gamma_report)
+set_tests_properties(cli_report_response PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma_fitted")
+# The response-curve suite (tests/fit/check_response_suite.py, docs/fitting.md
+# "Response curve"): 4 true curves x 3 declarations with tone_curve unknown,
+# 8-bit PNG (asserted) and JPEG (printed); 32 fits of 12 images 160x120,
+# about 50 s.
+add_test(NAME fit_response_suite
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/fit/check_response_suite.py
+                 ${CLAYFIT} ${CMAKE_CURRENT_BINARY_DIR}/response_suite --jpg)
+set_tests_properties(fit_response_suite PROPERTIES LABELS "fit;slow")
+# the same with the model chosen (--auto): every declaration chooses the
+# reference's model on PNG (JPEG printed); about 2 minutes
+add_test(NAME fit_response_suite_auto
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/fit/check_response_suite.py
+                 ${CLAYFIT} ${CMAKE_CURRENT_BINARY_DIR}/response_suite_auto --jpg --auto)
+set_tests_properties(fit_response_suite_auto PROPERTIES LABELS "fit;slow")
 # errors: exit 2 with the reason on stderr, no fit.json
 clayfit_fit_cli_test(error_fit_hold_out_of_range --exit 2 --stderr "--hold f0=0.5 is outside its range \\[0, 0.25\\]"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/never --model M2 --hold f0=0.5)
@@ -100,6 +138,17 @@ clayfit_cli_test(error_fit_no_capture --exit 2 --stderr "no-such-capture.json"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/no-such-capture.json -o ${FIT_SMALL}/never)
 # statistics over many fits: slow under the sanitizers, which the recovery
 # and hard-case tests already take through the same code
+# JPEG captures with EXIF exposures, end to end; and the JPEG sds' coverage
+# over 24 captures (slow).
+clayfit_c_test(test_fit_jpeg SOURCES fit/test_fit_jpeg.c LIBS clayfit_fit_test_support
+               LABELS "fit;capture")
+add_test(NAME test_fit_jpeg_sweep COMMAND test_fit_jpeg sweep)
+set_tests_properties(test_fit_jpeg_sweep PROPERTIES LABELS "fit;capture;slow")
+# clipped channels under the censored likelihood at the clip level: the
+# 2-sd coverage of 20 noisy 8-bit PNG captures declaring clip level 0.93
+clayfit_c_test(test_fit_censoring SOURCES fit/test_fit_censoring.c
+               LIBS clayfit_fit_test_support LABELS fit)
+target_include_directories(test_fit_censoring PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 clayfit_c_test(test_fit_calibration SOURCES fit/test_fit_calibration.c LIBS clayfit_fit_test_support
                LABELS "fit;slow")
 # the same with a pixel budget (about a tenth of the observations): the
@@ -132,6 +181,10 @@ target_include_directories(test_lsq_extrapolate PRIVATE ${PROJECT_SOURCE_DIR}/sr
 clayfit_c_test(test_fit_problem SOURCES fit/test_fit_problem.c LIBS clayfit_fit_test_support
                LABELS fit)
 target_include_directories(test_fit_problem PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
+# The fitted camera response curve: monotone, its special cases, its
+# derivatives and inverse (docs/model.md §5.4).
+clayfit_c_test(test_response_model SOURCES fit/test_response_model.c
+               LIBS clayfit_fit_read clayfit_capture LABELS fit)
 # More images than the fit's unknowns once had room for (1036), exposures
 # fitted: M0 rendered without noise, so every exposure is 1 and the albedo
 # 0.5 (the fit crashed or returned garbage; issue 15). About 15 s.
@@ -151,3 +204,34 @@ clayfit_cli_test(fit_many_images_exposures --schema ${SCHEMA}/fit.schema.json
      --no-multistart)
 set_tests_properties(cli_fit_many_images_exposures PROPERTIES LABELS "cli;fit;slow"
                      FIXTURES_REQUIRED fit_many_images)
+# Per-image gains (--fit-exposures; tests/fit/check_gains.py): a 24-image
+# synthetic M2 capture (the default pixel budget once left its last images
+# without observations and the fit failed); its gains found under the
+# default budget, and when the photos declare wrong exposures (+-20 %);
+# the refusal, exit 2 naming the image, of a gain that moves nothing.
+set(FIT_GAINS ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains)
+set(CHECK_GAINS ${CMAKE_CURRENT_SOURCE_DIR}/fit/check_gains.py)
+add_test(NAME cli_fit_gains_capture
+         COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} capture ${CLAYFIT} ${FIT_GAINS})
+set_tests_properties(cli_fit_gains_capture PROPERTIES LABELS "cli;fit" FIXTURES_SETUP fit_gains)
+foreach(mode default recover)
+  add_test(NAME cli_fit_gains_${mode}
+           COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} ${mode} ${CLAYFIT} ${FIT_GAINS})
+  set_tests_properties(cli_fit_gains_${mode} PROPERTIES LABELS "cli;fit" FIXTURES_REQUIRED fit_gains)
+endforeach()
+# ... and a gain per light (--fit-gains per-light) on small orthographic
+# captures: per image when each photo has its own light, shared by the
+# photos of one light otherwise; and a white balance per image
+# (--fit-gains per-image-rgb) under lights of different colours.
+foreach(mode refused per-light white-balance)
+  add_test(NAME cli_fit_gains_${mode} COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} ${mode} ${CLAYFIT}
+           ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains_${mode})
+  set_tests_properties(cli_fit_gains_${mode} PROPERTIES LABELS "cli;fit")
+endforeach()
+# The DiLiGenT ball with per-image gains under the default budget (skipped
+# without ../shared/data).
+add_test(NAME cli_fit_gains_diligent
+         COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} diligent ${CLAYFIT}
+                 ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains_diligent
+                 ${CMAKE_CURRENT_SOURCE_DIR}/diligent_ball.capture.json ${CLAYFIT_SHARED_DATA})
+set_tests_properties(cli_fit_gains_diligent PROPERTIES LABELS "cli;fit;slow" SKIP_RETURN_CODE 77)

@@ -5,8 +5,14 @@
  *   - a block's evaluation gives the same numbers, to the last bit, on many
  *     threads at once (more than its pool of scratch buffers) as on one;
  *   - its cost is the one of fit_problem_predict's predictions (one
- *     prediction formula), with a response exponent too;
- *   - cf_model_slot_param agrees with the model table. */
+ *     prediction formula), with a response curve too (plus its smoothness
+ *     prior);
+ *   - its gradient Jᵀu is the cost's by central differences, with every
+ *     unknown free, the response curve's slopes too;
+ *   - cf_model_slot_param agrees with the model table;
+ *   - with a response curve, the noise model's σ is the sensor's carried
+ *     through the curve, R'(x) √(read² + shot x) at x = R⁻¹(y) (it was
+ *     √(read² + shot y), in the curve's output units). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -141,6 +147,12 @@ static void test_cost_is_prediction(fit_problem *p, const double *x, const char 
   CHECK(fit_problem_predict(p, prediction, measured, &err) == CF_OK, "%s: %s", what, err.message);
   for (size_t i = 0; i < m; ++i)
     expected += 0.5 * (prediction[i] - measured[i]) * (prediction[i] - measured[i]);
+  int response_free = 0;
+  for (int u = 0; u < p->num_unknowns; ++u) response_free |= p->unknowns[u].kind == FIT_RESPONSE;
+  for (int j = 0; response_free && j + 1 < CF_RESPONSE_MODEL_KNOTS; ++j) {
+    double r = (p->response[j + 1] - p->response[j]) / FIT_RESPONSE_PRIOR_SD;
+    expected += 0.5 * r * r; /* the smoothness prior's */
+  }
   CHECK(fabs(total - expected) <= 1e-9 * expected, "%s: cost %.17g, from the predictions %.17g",
         what, total, expected);
 done:
@@ -150,8 +162,46 @@ done:
   free(measured);
 }
 
+/* The cost over every block at x, and with g its gradient Σ Jᵀu (k). */
+static double total_cost(fit_problem *p, const double *x, double *g) {
+  size_t k = (size_t)p->num_unknowns;
+  double *jtj = malloc(k * k * sizeof *jtj), *jtu = malloc(k * sizeof *jtu), total = 0.0, cost;
+  for (size_t a = 0; g && a < k; ++a) g[a] = 0.0;
+  for (size_t b = 0; jtj && jtu && b < p->num_blocks; ++b) {
+    fit_problem_evaluate(p, x, b, &cost, g ? jtj : NULL, jtu);
+    total += cost;
+    const int *column;
+    int columns = fit_problem_block_columns(p, b, &column);
+    for (int c = 0; g && c < columns; ++c) g[column[c]] += jtu[c];
+  }
+  free(jtj);
+  free(jtu);
+  return total;
+}
+
+/* The analytic gradient against central differences of the cost, every
+ * unknown; a wrong ∂R/∂a_j or chain rule shows here. */
+static void test_gradient(fit_problem *p, const double *x) {
+  size_t k = (size_t)p->num_unknowns;
+  double g[64], y[64], scale = 0.0;
+  total_cost(p, x, g);
+  for (size_t a = 0; a < k; ++a) scale = fmax(scale, fabs(g[a]));
+  for (size_t a = 0; a < k; ++a) {
+    double h = 1e-6 * fmax(1.0, fabs(x[a]));
+    memcpy(y, x, k * sizeof *y);
+    y[a] = x[a] + h;
+    double up = total_cost(p, y, NULL);
+    y[a] = x[a] - h;
+    double down = total_cost(p, y, NULL);
+    double fd = (up - down) / (2.0 * h);
+    double off = fabs(fd - g[a]) / fmax(fabs(g[a]), 1e-3 * scale);
+    CHECK(off < 1e-4, "unknown %zu (kind %d, slot %d): gradient %.9g, central difference %.9g", a,
+          (int)p->unknowns[a].kind, p->unknowns[a].slot, g[a], fd);
+  }
+}
+
 /* M2 with every slot, the scale and the exposures free, a little off the
- * truth (and again with a response exponent). */
+ * truth (and again with a response curve). */
 static void test_evaluate(const cf_capture *capture) {
   fit_problem p;
   cf_error err = {0};
@@ -173,14 +223,48 @@ static void test_evaluate(const cf_capture *capture) {
   for (int u = 0; u < p.num_unknowns; ++u) x[u] += 0.01 * (u % 5 - 2); /* inside the bounds */
   test_threads(&p, x);
   test_cost_is_prediction(&p, x, "linear");
-  p.response = 0.8;
+  const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.8, 0.7, 0.9, 1.1, 1.3, 1.2};
+  memcpy(p.response, slopes, sizeof slopes);
   fit_problem_clear_unknowns(&p);
   for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
+  fit_problem_free_scale(&p);
+  fit_problem_free_exposures(&p);
   fit_problem_free_response(&p);
   CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
   fit_problem_get_x(&p, x);
   test_threads(&p, x);
-  test_cost_is_prediction(&p, x, "with a response exponent");
+  test_cost_is_prediction(&p, x, "with a response curve");
+  test_gradient(&p, x);
+  fit_problem_release(&p);
+}
+
+/* The noise model's σ at the measurements through the curve R(x) = √x
+ * (every slope 1/2): R'(x) √(read² + shot x), x = y², R'(x) = 1/(2y). */
+static void test_noise_through_curve(const cf_capture *capture) {
+  fit_problem p;
+  cf_error err = {0};
+  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 1, &err) != CF_OK) {
+    CHECK(0, "init: %s", err.message);
+    return;
+  }
+  cf_capture_summary about;
+  cf_capture_summarize(capture, &about);
+  CHECK(fit_capture_has_noise(capture), "the capture has a noise model");
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) p.response[j] = 0.5;
+  fit_problem_clear_unknowns(&p);
+  fit_problem_free_response(&p);
+  fit_problem_set_sigma(&p, capture, 1.0);
+  double read2 = about.noise_read * about.noise_read, worst = 0.0;
+  size_t checked = 0;
+  for (size_t i = 0; i < 3 * p.count; ++i) {
+    double y = p.y[i], x = y * y;
+    if (!(x > cf_response_model_knot(CF_RESPONSE_MODEL_KNOTS - 1))) continue;
+    double sigma = sqrt(read2 + about.noise_shot * x) / (2.0 * y);
+    worst = fmax(worst, fabs(1.0 / p.inv_sigma[i] / sigma - 1.0));
+    ++checked;
+  }
+  CHECK(checked > 100 && worst < 1e-9, "σ through the curve: %zu values, worst relative error %g",
+        checked, worst);
   fit_problem_release(&p);
 }
 
@@ -200,6 +284,13 @@ int main(void) {
   if (capture) {
     test_many_unknowns(capture);
     test_evaluate(capture);
+    cf_capture_free(capture);
+  }
+  o.read_noise = 0.002;
+  o.shot_noise = 0.0005;
+  capture = fit_test_capture(dir, "m2_noise", &o);
+  if (capture) {
+    test_noise_through_curve(capture);
     cf_capture_free(capture);
   }
   fit_test_remove_dir(dir);

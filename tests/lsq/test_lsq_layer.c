@@ -9,7 +9,8 @@
  *   - the covariance (JᵀJ)⁻¹ of a known matrix, and a singular one flagged;
  *   - the Newton decrement ½ gᵀ H⁺ g with and without pinned parameters,
  *     and a direction no data see dropped;
- *   - Eigen's eigen-decomposition and Cholesky behind linalg.h. */
+ *   - Eigen's eigen-decomposition and Cholesky behind linalg.h, and the
+ *     Schur complement the gains' check uses (cf_schur_covariance). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -216,7 +217,38 @@ static void test_linalg(void) {
   CHECK(!cf_symmetric_eigen(2, not_finite, values, NULL), "NaN decomposed");
 }
 
+/* cf_schur_covariance: the last g unknowns' covariance with the first
+ * profiled out; a direction of the first block that nothing constrains
+ * dropped, not traded; a gain that only trades with the first: singular. */
+static void test_schur(void) {
+  /* D − bᵀ b / 4 = [[2.75, 0.5], [0.5, 4]], its inverse [[4, −0.5], [−0.5, 2.75]] / 10.75 */
+  const double a[9] = {4.0, 1.0, 2.0, 1.0, 3.0, 1.0, 2.0, 1.0, 5.0};
+  const double want[4] = {4.0 / 10.75, -0.5 / 10.75, -0.5 / 10.75, 2.75 / 10.75};
+  double covariance[4], weakest[2];
+  CHECK(cf_schur_covariance(3, 2, a, covariance, weakest) == 1, "regular");
+  for (int i = 0; i < 4; ++i)
+    CHECK(fabs(covariance[i] - want[i]) < 1e-12, "covariance[%d] %g, want %g", i, covariance[i],
+          want[i]);
+  const double free_first[9] = {0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0};
+  CHECK(cf_schur_covariance(3, 2, free_first, covariance, weakest) == 1 &&
+            fabs(covariance[0] - 0.5) < 1e-12 && fabs(covariance[3] - 1.0 / 3.0) < 1e-12,
+        "an unconstrained first unknown dropped: %g %g", covariance[0], covariance[3]);
+  /* the first gain's column is the first unknown's: it only trades with it */
+  const double trades[9] = {1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 2.0};
+  CHECK(cf_schur_covariance(3, 2, trades, covariance, weakest) == 0 &&
+            fabs(fabs(weakest[0]) - 1.0) < 1e-9 && fabs(weakest[1]) < 1e-9,
+        "a gain that trades: singular, weakest (%g, %g)", weakest[0], weakest[1]);
+  /* the same trade between two gains and the first unknown, no zero diagonal */
+  const double pair[9] = {2.0, 1.0, 1.0, 1.0, 1.0, 0.0, 1.0, 0.0, 1.0};
+  CHECK(cf_schur_covariance(3, 2, pair, covariance, weakest) == 0 &&
+            fabs(fabs(weakest[0]) - fabs(weakest[1])) < 1e-9,
+        "two gains against one unknown: singular, weakest (%g, %g)", weakest[0], weakest[1]);
+  const double not_finite[9] = {1.0, NAN, 0.0, NAN, 1.0, 0.0, 0.0, 0.0, 1.0};
+  CHECK(cf_schur_covariance(3, 2, not_finite, covariance, weakest) == -1, "NaN");
+}
+
 int main(void) {
+  test_schur();
   test_solve();
   test_collapsed_radius();
   test_covariance();
