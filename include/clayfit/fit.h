@@ -218,7 +218,9 @@ typedef struct cf_fit_result {
    * c of image k has the gain s e_k b_kc; owned, NULL in older files */
   double *white_balance, *white_balance_sd;
   int white_balance_fitted;
-  double sigma;              /* σ when estimated from the residuals, else 0 */
+  double sigma;              /* σ when estimated from the residuals, else 0;
+                              * with a fitted response curve τ, in linear
+                              * units: σ = τ R'(x) (docs/model.md (52a)) */
 
   /* the pixel budget the fit used: sample_count observations drawn by
    * `sampling` from the population_count in use (sample_count 0: every

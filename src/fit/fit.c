@@ -38,8 +38,15 @@ enum {
   REFINE_TARGET = 40000,
   MAX_UNCONSTRAINED_ROUNDS = 4,
   REWEIGHT_ROUNDS = 4,
-  FOOTPRINT_ROUNDS = 3
+  FOOTPRINT_ROUNDS = 3,
+  TAU_ROUNDS = 4 /* sigma_through_curve */
 };
+/* τ's floor, in linear units (x = 1 the top code), a tenth of an 8-bit
+ * photo's quantisation (1.1e-3): a noise-free float capture's τ (5e-9,
+ * and still at a floor of 1e-6) let the solves wander off
+ * (cli_fit_response: the diffuse roughness "not constrained", the albedo
+ * 0.42 for 0.6); at 1e-4 it is exact to 1e-7 */
+#define TAU_FLOOR 1e-4
 
 void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   memset(o, 0, sizeof *o);
@@ -321,6 +328,36 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
   return s;
 }
 
+/* Without a noise model, with a response curve: τ, the one σ in linear
+ * units (σ = τ R'(x)), from the residuals at the curve, solved for and
+ * estimated again until τ moves by less than 1 % (TAU_ROUNDS at most).
+ * The start's σ assumed a linear response (on 8-bit sRGB photos declared
+ * linear, twice the sRGB declaration's, and so was the albedo's sd), and
+ * a τ from a solve at a wrong one (the model choice's final run starts
+ * from its candidate's curve and that σ) came out 14 % high
+ * (docs/fitting.md "Response curve"). run->sigma stays the start's: the
+ * starts' costs, which fit_ambiguous weighs, are in its units. */
+static cf_status sigma_through_curve(fit_run *run, cf_error *err) {
+  fit_problem *p = &run->p;
+  double tau = run->sigma, before;
+  cf_status s = fit_estimate_sigma(p, &tau, err); /* at the start's curve */
+  tau = fmax(tau, TAU_FLOOR);
+  for (int round = 0; s == CF_OK && round < TAU_ROUNDS; ++round) {
+    fit_problem_set_sigma(p, run->capture, tau);
+    s = fit_problem_reweight(p, run->capture, err);
+    if (s == CF_OK) s = fit_solve(p, run->o, run->o->max_iterations, &run->summary, err);
+    before = tau;
+    if (s == CF_OK) s = fit_estimate_sigma(p, &tau, err);
+    tau = fmax(tau, TAU_FLOOR);
+    if (s != CF_OK || fabs(tau - before) < 0.01 * before) break;
+  }
+  if (s == CF_OK) {
+    fit_problem_set_sigma(p, run->capture, tau);
+    run->r->sigma = tau;
+  }
+  return s;
+}
+
 /* The pixel footprints at the refined values, which are near the end (the
  * solves below then see them from the start, and the rounds after them
  * seldom change anything); with a noise model, weights from the
@@ -331,11 +368,12 @@ static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
   fit_problem *p = &run->p;
   const cf_fit_options *o = run->o;
   cf_status s = fit_footprint_update(p, run->capture, o, NULL, err);
-  int weights_current = 0;
-  if (s == CF_OK && run->has_noise)
+  int weights_current = 0, vary = run->has_noise || fit_problem_sigma_through_curve(p);
+  if (s == CF_OK && !run->has_noise && vary) s = sigma_through_curve(run, err);
+  if (s == CF_OK && vary)
     s = fit_solve_reweighted(p, run->capture, o, REWEIGHT_ROUNDS, &run->summary, &weights_current,
                              err);
-  if (s == CF_OK && run->has_noise && !weights_current)
+  if (s == CF_OK && vary && !weights_current)
     s = fit_problem_reweight(p, run->capture, err);
   for (int round = 0; s == CF_OK && round < FOOTPRINT_ROUNDS; ++round) {
     int changed = 0;
@@ -346,7 +384,7 @@ static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
     s = fit_newton_decrement(p, o, &decrement, err);
     if (s != CF_OK || decrement < FIT_RESOLVE_DECREMENT) break;
     s = fit_solve(p, o, o->max_iterations, &run->summary, err);
-    if (s == CF_OK && run->has_noise) s = fit_problem_reweight(p, run->capture, err);
+    if (s == CF_OK && vary) s = fit_problem_reweight(p, run->capture, err);
   }
   return s;
 }

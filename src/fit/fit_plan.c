@@ -161,15 +161,16 @@ double fit_newton_decrement_from(const fit_problem *p, const double *jtj, const 
   return cf_lsq_newton_decrement(p->num_unknowns, jtj, g, p->at_bound);
 }
 
-/* With a noise model, σ from the prediction (fit_problem_reweight) and
- * solve again, to the fixed point (the largest change in a model slot
- * below 1e-7 of its range's width, or `rounds` rounds); without one, one
- * solve. */
+/* With a noise model (or σ through the curve), σ from the prediction
+ * (fit_problem_reweight) and solve again, to the fixed point (the
+ * largest change in a model slot below 1e-7 of its range's width, or
+ * `rounds` rounds); without one, one solve. */
 cf_status fit_solve_reweighted(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
                                int rounds, cf_lsq_summary *summary, int *weights_current,
                                cf_error *err) {
   if (weights_current) *weights_current = 0;
-  if (!fit_capture_has_noise(capture)) return fit_solve(p, o, o->max_iterations, summary, err);
+  if (!fit_capture_has_noise(capture) && !fit_problem_sigma_through_curve(p))
+    return fit_solve(p, o, o->max_iterations, summary, err);
   cf_status s = CF_OK;
   for (int round = 0; s == CF_OK && round < rounds; ++round) {
     double before[CF_MAX_DIM], decrement = HUGE_VAL;

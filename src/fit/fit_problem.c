@@ -351,20 +351,34 @@ static void noise_inv_sigma(fit_problem *p, double read, double shot, const doub
   for (size_t i = 0; i < n; ++i) p->inv_sigma[i] = 1.0 / sqrt(fmax(p->inv_sigma[i], floor));
 }
 
+int fit_problem_sigma_through_curve(const fit_problem *p) {
+  return p->sigma > 0.0 && p->response_on;
+}
+
+double fit_problem_curve_slope(const fit_problem *p, double mu) {
+  return sqrt(noise_variance(p, 1.0, 0.0, mu));
+}
+
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma) {
   double read, shot;
   int noise = capture_noise(capture, &read, &shot);
   p->sigma = noise ? 0.0 : sigma;
+  int through = fit_problem_sigma_through_curve(p);
   /* one σ for all, or the measurements, turned in place into the noise
-   * model's 1/σ */
+   * model's 1/σ (or τ R'(x)'s: a read noise τ alone) */
   for (size_t i = 0; i < 3 * p->count; ++i)
-    p->inv_sigma[i] = noise ? p->y[i] : 1.0 / sqrt(sigma * sigma);
+    p->inv_sigma[i] = noise || through ? p->y[i] : 1.0 / sqrt(sigma * sigma);
   if (noise) noise_inv_sigma(p, read, shot, p->inv_sigma);
+  if (through) noise_inv_sigma(p, sigma, 0.0, p->inv_sigma);
 }
 
 cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_error *err) {
   double read, shot;
-  if (!capture_noise(capture, &read, &shot)) return CF_OK;
+  if (!capture_noise(capture, &read, &shot)) {
+    if (!fit_problem_sigma_through_curve(p)) return CF_OK;
+    read = p->sigma; /* τ R'(x): a read noise τ alone */
+    shot = 0.0;
+  }
   size_t n = 3 * p->count;
   double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
   cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)

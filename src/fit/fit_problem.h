@@ -232,6 +232,16 @@ int fit_capture_has_noise(const cf_capture *capture);
  * for all. */
 void fit_problem_set_sigma(fit_problem *p, const cf_capture *capture, double sigma);
 
+/* Without a noise model but with a response curve on, the one σ is τ in
+ * linear units, carried through the curve: σ = τ R'(x) at x = R⁻¹(μ), μ
+ * the measurement (fit_problem_set_sigma) or the prediction
+ * (fit_problem_reweight), so that declaring another encoding changes
+ * only the units (docs/model.md (52a)). Is that the case for p? */
+int fit_problem_sigma_through_curve(const fit_problem *p);
+
+/* R'(x) at x = R⁻¹(mu), as the noise model takes it (1 without a curve). */
+double fit_problem_curve_slope(const fit_problem *p, double mu);
+
 /* Declare the unknowns (in this order: model slots, the scale, the
  * exposures) and the blocks; call after the last. The unknowns'
  * arrays grow as they are declared; when that fails (out of memory)
@@ -264,7 +274,7 @@ cf_status fit_problem_finish(fit_problem *p, cf_error *err);
  * pixel, which the ill-conditioned directions (ρ against τ in a flash
  * capture) amplify; at the fixed point of prediction-based weights the
  * quasi-score Σ (y − μ)/v(μ) ∂μ is 0, which is unbiased. No-op without a
- * noise model. */
+ * noise model, unless σ goes through the curve. */
 cf_status fit_problem_reweight(fit_problem *p, const cf_capture *capture, cf_error *err);
 
 /* x from the problem's current values, and the current values from x. */

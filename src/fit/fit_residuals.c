@@ -109,16 +109,19 @@ cf_status fit_statistics(fit_problem *p, const cf_fit_options *o, cf_fit_result 
 
 /* σ = 1.4826 × the median absolute residual (a robust estimate), over the
  * uncensored residuals at the current values; a sample's weights weigh
- * the median. */
+ * the median. With σ through the curve, τ: the residuals divided by
+ * R'(x) at the prediction. */
 cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
   size_t n = 3 * p->count;
   double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
   cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
                                        : cf_error_set(err, CF_ENOMEM, "out of memory");
   size_t m = 0;
+  int through = fit_problem_sigma_through_curve(p);
   for (size_t i = 0; s == CF_OK && i < n; ++i) {
     double e = prediction[i] - measured[i];
     if (fit_problem_censored(p, i, prediction[i], measured[i])) continue;
+    if (through) e /= fit_problem_curve_slope(p, prediction[i]);
     double root = p->sample_root ? p->sample_root[i / 3] : 1.0;
     prediction[m] = fabs(e);
     measured[m++] = root * root; /* the weight (m <= i: nothing unread is overwritten) */
@@ -138,7 +141,8 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
 
 /* The problem over a population at a fit's values (parameters, scale,
  * response, exposures), nothing free, its footprints integrated as o says
- * and σ from the noise model at the prediction, or `sigma` for all. On
+ * and σ from the noise model at the prediction, or `sigma` for all (τ
+ * through the curve at the prediction: fit_problem_set_sigma). On
  * failure nothing is left to release. */
 static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
                                 const fit_population *population, const cf_fit_result *fit,
@@ -160,8 +164,10 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
   if (s == CF_OK) s = fit_footprint_update(p, capture, o, NULL, err);
   if (s == CF_OK && fit_capture_has_noise(capture))
     s = fit_problem_reweight(p, capture, err);
-  else if (s == CF_OK)
+  else if (s == CF_OK) {
     fit_problem_set_sigma(p, capture, sigma);
+    s = fit_problem_reweight(p, capture, err); /* (a no-op unless σ goes through the curve) */
+  }
   if (s != CF_OK) fit_problem_release(p);
   return s;
 }
@@ -202,7 +208,8 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
     *cost += block_cost;
   }
   if (log_sigma) *log_sigma = 0.0;
-  if (s == CF_OK && log_sigma && fit->response_fitted && fit_capture_has_noise(capture))
+  if (s == CF_OK && log_sigma && fit->response_fitted &&
+      (fit_capture_has_noise(capture) || fit_problem_sigma_through_curve(&p)))
     s = sum_log_sigma(&p, log_sigma, err);
   if (s == CF_OK) s = fit_statistics(&p, o, stats, err);
   if (s == CF_OK && fit->exposures) {

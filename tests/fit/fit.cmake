@@ -101,8 +101,8 @@ clayfit_fit_cli_test(report_response --schema ${SCHEMA}/report.schema.json
 set_tests_properties(cli_report_response PROPERTIES FIXTURES_REQUIRED "fit_small;fit_gamma_fitted")
 # The response-curve suite (tests/fit/check_response_suite.py, docs/fitting.md
 # "Response curve"): 4 true curves x 3 declarations with tone_curve unknown,
-# 8-bit PNG (asserted) and JPEG (printed); 32 fits of 12 images 160x120,
-# about 50 s.
+# 8-bit PNG (asserted) and JPEG (printed); 35 fits of 12 images 160x120,
+# about 40 s.
 add_test(NAME fit_response_suite
          COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/fit/check_response_suite.py
                  ${CLAYFIT} ${CMAKE_CURRENT_BINARY_DIR}/response_suite --jpg)
@@ -222,8 +222,9 @@ endforeach()
 # ... and a gain per light (--fit-gains per-light) on small orthographic
 # captures: per image when each photo has its own light, shared by the
 # photos of one light otherwise; and a white balance per image
-# (--fit-gains per-image-rgb) under lights of different colours.
-foreach(mode refused per-light white-balance)
+# (--fit-gains per-image-rgb) under lights of different colours; per-light
+# refused where photos have several lights or one light lights them all.
+foreach(mode refused per-light several-lights white-balance)
   add_test(NAME cli_fit_gains_${mode} COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} ${mode} ${CLAYFIT}
            ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains_${mode})
   set_tests_properties(cli_fit_gains_${mode} PROPERTIES LABELS "cli;fit")

@@ -23,7 +23,7 @@ COLMAP_WRITE := src/capture/colmap_write.c
 IMAGE := src/capture/image_io.cpp src/capture/image_exr_check.c src/capture/image_check.c \
          src/capture/colour.c src/capture/envmap.c
 CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
-FIT_READ := src/fit/fit_read.c src/fit/fit_result.c
+FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c
 
 # target: its harness, then the sources it reads with
 fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
