@@ -97,10 +97,13 @@ static cf_status parse_hold(const char *text, char *name, cf_fit_hold *h, cf_err
                        : cli_parse_number(equals + 1, what, &h->value[0], err);
 }
 
-static void print_choice(const cf_fit_choice *choice) {
+/* With a fitted response curve the held-out score is in decoded units
+ * (times σ's geometric mean: docs/model.md §6.8). */
+static void print_choice(const cf_fit_choice *choice, int response_fitted) {
   printf("model choice (held out: %s; BIC margin %g, held-out margin %g %%; %.3g s):\n",
          choice->heldout, choice->bic_margin, 100.0 * choice->heldout_margin, choice->seconds);
-  printf("  model  unknowns  BIC            held-out RMS (sigma)  held-out rel. RMSE\n");
+  printf("  model  unknowns  BIC            %-20s  held-out rel. RMSE\n",
+         response_fitted ? "held-out (decoded)" : "held-out RMS (sigma)");
   for (int m = 0; m < choice->count; ++m) {
     const cf_fit_candidate *c = &choice->candidate[m];
     const char *code = cf_model_info_get(c->model)->code;
@@ -464,7 +467,7 @@ static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
   if (s != CF_OK) return s;
   for (int i = 0; i < result->warning_count && !ctx->quiet; ++i)
     fprintf(stderr, "clayfit fit: warning: %s\n", result->warnings[i]);
-  if (choice) print_choice(choice);
+  if (choice) print_choice(choice, result->response_fitted);
   print_summary(result, capture, path);
   return CF_OK;
 }

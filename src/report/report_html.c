@@ -169,12 +169,14 @@ static void choice_table(FILE *f, const report_data *d) {
   }
   fputs("<p>Held out: ", f);
   html(f, string_at(choice, "heldout"));
-  fputs(
-      ".</p>\n<table><tr><th class=\"l\">model</th><th>unknowns</th><th>BIC</th>"
-      "<th>held-out RMS (&sigma;)</th><th>held-out relative RMSE</th><th>training relative "
-      "RMSE</th><th>time (s)</th><th class=\"l\">parameters</th><th class=\"l\">verdict</th>"
-      "</tr>\n",
-      f);
+  /* with a fitted response curve the held-out score is in decoded units
+   * (times σ's geometric mean: docs/model.md §6.8) */
+  fprintf(f,
+          ".</p>\n<table><tr><th class=\"l\">model</th><th>unknowns</th><th>BIC</th>"
+          "<th>held-out RMS (%s)</th><th>held-out relative RMSE</th><th>training relative "
+          "RMSE</th><th>time (s)</th><th class=\"l\">parameters</th><th class=\"l\">verdict</th>"
+          "</tr>\n",
+          d->fit->result.response_fitted ? "decoded units" : "&sigma;");
   for (size_t i = 0; i < json_array_size(list); ++i) {
     const json_t *c = json_array_get(list, i);
     fprintf(f, "<tr%s><td class=\"l\">",
