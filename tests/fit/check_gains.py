@@ -188,6 +188,24 @@ def facing(n, light):
     return max(0.0, n[0] * light[0] + n[1] * light[1] + n[2] * light[2])
 
 
+def write_ortho_capture(folder, name, names, lights):
+    """capture.json of an orthographic, linear 8-bit capture of the photos
+    `names` (with mask.png) under `lights`; its path."""
+    capture = {
+        "clayfit_capture": 1,
+        "name": name,
+        "camera": {"type": "orthographic", "view": [0, 0, 1]},
+        "images": {"files": names, "mask": "mask.png"},
+        "colour": {"encoding": "linear"},
+        "geometry": {"type": "sphere_from_silhouettes", "margin_px": 1},
+        "lights": lights,
+    }
+    path = os.path.join(folder, "capture.json")
+    with open(path, "w") as f:
+        json.dump(capture, f, indent=1)
+    return path
+
+
 def ortho_capture(folder, lights, gains, name):
     """An orthographic capture of a Lambertian sphere (8-bit, linear), image k
     lit by the directional light lights[k] (a row each of the capture's
@@ -206,20 +224,9 @@ def ortho_capture(folder, lights, gains, name):
         f.writelines(f"{l[0]} {l[1]} {l[2]}\n" for l in lights)
     with open(os.path.join(folder, "intensities.txt"), "w") as f:
         f.writelines("4 4 4\n" for _ in lights)  # an albedo of 0.62
-    capture = {
-        "clayfit_capture": 1,
-        "name": name,
-        "camera": {"type": "orthographic", "view": [0, 0, 1]},
-        "images": {"files": names, "mask": "mask.png"},
-        "colour": {"encoding": "linear"},
-        "geometry": {"type": "sphere_from_silhouettes", "margin_px": 1},
-        "lights": [{"type": "directional_per_image", "directions": "directions.txt",
-                    "intensities": "intensities.txt"}],
-    }
-    path = os.path.join(folder, "capture.json")
-    with open(path, "w") as f:
-        json.dump(capture, f, indent=1)
-    return path
+    return write_ortho_capture(folder, name, names, [
+        {"type": "directional_per_image", "directions": "directions.txt",
+         "intensities": "intensities.txt"}])
 
 
 def refused(clayfit, folder):
@@ -300,20 +307,9 @@ def lights_capture(folder, lights, truth, declared, images, name):
     for n in names:
         write_png(os.path.join(folder, n), rows)
     write_png(os.path.join(folder, "mask.png"), mask)
-    capture = {
-        "clayfit_capture": 1,
-        "name": name,
-        "camera": {"type": "orthographic", "view": [0, 0, 1]},
-        "images": {"files": names, "mask": "mask.png"},
-        "colour": {"encoding": "linear"},
-        "geometry": {"type": "sphere_from_silhouettes", "margin_px": 1},
-        "lights": [{"type": "directional", "direction": list(l), "irradiance": [e, e, e]}
-                   for l, e in zip(lights, declared)],
-    }
-    path = os.path.join(folder, "capture.json")
-    with open(path, "w") as f:
-        json.dump(capture, f, indent=1)
-    return path
+    return write_ortho_capture(folder, name, names, [
+        {"type": "directional", "direction": list(l), "irradiance": [e, e, e]}
+        for l, e in zip(lights, declared)])
 
 
 def several_lights(clayfit, folder):
