@@ -75,6 +75,10 @@ typedef struct cf_capture_image {
   int lights;           /* lights of this image */
   int jpeg;             /* 1: a JPEG file, whose lossy coding leaves errors correlated
                            within its blocks (docs/model.md, the noise) */
+  int jpeg_quality;     /* a JPEG's coding (cf_jpeg_coding_read): libjpeg's quality
+                           nearest its tables, 0 when its markers could not be read */
+  int jpeg_exact;       /* 1: its tables are that quality's exactly */
+  int jpeg_chroma;      /* its chroma subsampling, a cf_chroma */
 } cf_capture_image;
 
 /* Progress of a long load, for a progress line: stage is a short phrase
@@ -120,15 +124,23 @@ void cf_capture_files_free(char **files, size_t count);
 
 const cf_observations *cf_capture_observations(const cf_capture *capture);
 size_t cf_capture_image_count(const cf_capture *capture);
-/* The light that lights image `index` alone, for a gain per light (clayfit
- * fit --fit-gains per-light): one id for the images one light lights (the
- * capture file's only light, a flash, point or directional one or an
- * environment, lights every image: id 0; a directional_per_image light is
- * one light for the images whose rows give the same direction and
- * intensity: the first such image's index), −1 when the capture has
- * several lights (a gain per light would then sit inside each image's sum
- * over them). */
-long cf_capture_image_light_id(const cf_capture *capture, size_t index);
+/* The capture file's lights as a gain per light sees them (clayfit fit
+ * --fit-gains per-light, docs/fitting.md): ids (images × lights, lights =
+ * cf_observations' lights; image k's slot j at k × lights + j) gets each
+ * slot's light, 0 … count − 1 numbered as first met (image by image, slot
+ * by slot), or −1 for a slot without light (zero irradiance). A light is
+ * an entry of the capture file's "lights": a flash, point or directional
+ * light (the same in every image), an environment (all its slots); a
+ * directional_per_image light is one light per distinct row (direction
+ * and intensity), shared by the images whose rows are the same. Returns
+ * the count; allocates nothing. */
+size_t cf_capture_light_ids(const cf_capture *capture, long *ids);
+/* The name of image `image`'s light slot `slot` (as in ids) for messages
+ * and fit.json: "light 2" (the capture file's second light), "light 1
+ * (environment)", or a directional_per_image row's "light 1, row of
+ * 003.png" (the first image with that row). */
+void cf_capture_light_name(const cf_capture *capture, size_t image, int slot, char *text,
+                           size_t size);
 const cf_capture_image *cf_capture_image_at(const cf_capture *capture, size_t index);
 
 /* The geometry of a point of observation i's pixel footprint: the surface
@@ -192,8 +204,16 @@ cf_status cf_capture_write_overlay(const cf_capture *capture, size_t index, cons
  * bytes), each pixel's clip mask (bit c: channel c clipped). For reports
  * that show the photo beside the fit's rendering. */
 struct cf_image;
+struct cf_decode;
 cf_status cf_capture_read_radiance(const cf_capture *capture, size_t index,
                                    struct cf_image *radiance, uint8_t *clipped, cf_error *err);
+
+/* Image `index` as stored (3 channels, a grey image's one in all three;
+ * free with cf_image_free) and how the observations decoded it
+ * (cf_decode_pixel; its inverse cf_encode_value): for the fit's model of
+ * a JPEG's coding, which works on stored values. */
+cf_status cf_capture_read_stored(const cf_capture *capture, size_t index, struct cf_image *stored,
+                                 struct cf_decode *decode, cf_error *err);
 
 /* Warnings raised while loading (for example, environment-map values
  * clamped to 0, an image that does not see the sphere). */

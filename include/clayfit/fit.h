@@ -62,11 +62,14 @@ typedef enum cf_param_status {
 } cf_param_status;
 
 /* What cf_fit_options.fit_exposures frees (docs/fitting.md, Exposures):
- * nothing, a gain per image (its exposure), or a gain per light, shared by
- * the images one light lights alone (cf_capture_image_light_id; with a
- * light per image, as in DiLiGenT, the same unknowns as per image), or an
+ * nothing, a gain per image (its exposure), or a gain per light
+ * (cf_capture_light_ids): with one light an image, shared by the images
+ * that light lights (as in DiLiGenT, the same unknowns as per image), else
+ * inside each image's sum over its lights (cf_fit_result.light_gains), or an
  * RGB gain per image (a white balance: the per-image gain, green's, and
  * red's and blue's against it, each with its mean log over the images 0). */
+/* Room for a light's name in cf_fit_result.light_names. */
+#define CF_FIT_LIGHT_NAME 96
 enum { CF_GAINS_NONE = 0, CF_GAINS_PER_IMAGE = 1, CF_GAINS_PER_LIGHT = 2, CF_GAINS_PER_IMAGE_RGB = 3 };
 
 typedef struct cf_fit_options {
@@ -108,6 +111,10 @@ typedef struct cf_fit_options {
    * anyway */
   size_t budget;
   cf_sampling sampling;
+  int jpeg_plain;          /* 1: leave JPEG's coding error out of the model
+                             (default 0: JPEG photos whose quality their
+                             tables give are compared with the prediction
+                             as their codec codes it, docs/model.md §6.2) */
   double density;         /* the film's known thickness for the report of
                              density and absorption; NaN: the convention
                              (mean absorption 0.8) */
@@ -144,7 +151,7 @@ enum { CF_FIT_MAX_NAMED = 64 }; /* holds, and frees, at most */
 
 /* The options of `model`: its defaults, with the settings every model
  * shares taken from `settings` (loss, loss_scale, fit_exposures,
- * multistart, max_iterations, threads, density, footprint,
+ * jpeg_plain, multistart, max_iterations, threads, density, footprint,
  * footprint_tolerance, budget, sampling), then the holds and the frees
  * (parameter names; a free fits what would be held for the scale). With
  * known (the model choice: one flag per hold, then per free), a name the
@@ -218,6 +225,13 @@ typedef struct cf_fit_result {
    * c of image k has the gain s e_k b_kc; owned, NULL in older files */
   double *white_balance, *white_balance_sd;
   int white_balance_fitted;
+  /* the gains per light inside each image's sum over its lights
+   * (CF_GAINS_PER_LIGHT where an image has several lights; docs/fitting.md):
+   * light_count lights (0 otherwise), each's gain g_l (their mean log is
+   * 0), its sd and its name (cf_capture_light_name); owned, NULL without */
+  size_t light_count;
+  double *light_gains, *light_gains_sd;
+  char (*light_names)[CF_FIT_LIGHT_NAME];
   double sigma;              /* σ when estimated from the residuals, else 0;
                               * with a fitted response curve τ, in linear
                               * units: σ = τ R'(x) (docs/model.md (52a)) */
@@ -266,6 +280,12 @@ typedef struct cf_fit_result {
    * the rest */
   size_t core_residuals;
   double core_rmse, core_relative_rmse, rest_rmse, rest_relative_rmse;
+
+  /* JPEG's coding error, modelled (0 images: not): the codec's mean change
+   * of the predicted photos where they were compared, in codes of 1/255:
+   * its rms over the channels and its mean per channel */
+  int jpeg_images;
+  double jpeg_bias_rms, jpeg_bias_mean[3];
 
   int warning_count;
   char warnings[CF_FIT_MAX_WARNINGS][256];

@@ -99,6 +99,34 @@ typedef enum cf_chroma { CF_CHROMA_444, CF_CHROMA_422, CF_CHROMA_420 } cf_chroma
 cf_status cf_image_write_jpeg(const char *path, const cf_image *image, int quality,
                               cf_chroma chroma, const cf_image_info *info, cf_error *err);
 
+/* `in` (3 channels, stored values in [0, 1]) coded as an 8-bit JPEG at
+ * libjpeg's quality 1..100 with that chroma subsampling, in memory, and
+ * decoded back into *out (allocated here; freed on failure): what the
+ * codec makes of an image (the fit's model of a JPEG's coding error). */
+cf_status cf_image_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma, cf_image *out,
+                                  cf_error *err);
+
+/* How a JPEG file was coded, from its markers: the quality whose
+ * libjpeg-scaled standard luminance table (ITU-T T.81 Annex K, Table K.1;
+ * libjpeg's jcparam.c scaling) comes nearest the file's first
+ * quantisation table (exact: 1 when it is that table), and the chroma
+ * subsampling of its frame header's sampling factors. */
+typedef struct cf_jpeg_coding {
+  int quality;
+  int exact;
+  cf_chroma chroma;
+} cf_jpeg_coding;
+
+/* Read from the file's bytes (its markers up to the first scan); every
+ * length and field is checked: CF_EINVAL naming the file and the marker
+ * for a file that is not a baseline or progressive JPEG with an 8-bit
+ * luminance table and a 3-component frame (or 1 component: 4:4:4). */
+cf_status cf_jpeg_coding_read(const char *path, cf_jpeg_coding *coding, cf_error *err);
+
+/* The same from `size` bytes in memory (`what` names them in errors). */
+cf_status cf_jpeg_coding_parse(const unsigned char *bytes, size_t size, const char *what,
+                               cf_jpeg_coding *coding, cf_error *err);
+
 /* ---- colour decoding ---- */
 
 typedef enum cf_transfer {
@@ -161,6 +189,10 @@ typedef struct cf_decode {
  * below zero stays finite. */
 unsigned cf_decode_pixel(const cf_decode *decode, const float *stored, int channels,
                          double radiance[3]);
+
+/* The inverse: the stored value that decodes to `radiance` (one channel,
+ * clip level aside), and (slope not NULL) d stored / d radiance. */
+double cf_encode_value(const cf_decode *decode, double radiance, double *slope);
 
 #ifdef __cplusplus
 }

@@ -181,17 +181,69 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
   summary->circle_source = capture->circle_source;
 }
 
-long cf_capture_image_light_id(const cf_capture *capture, size_t index) {
-  const cf_capture_spec *spec = &capture->spec;
-  if (spec->num_lights != 1 || index >= spec->num_images) return -1;
-  if (spec->lights[0].kind != CF_LIGHT_SPEC_PER_IMAGE) return 0;
+/* The first image, at most `index`, whose slot `slot` holds the same light
+ * as image `index`'s (direction and intensity). */
+static size_t first_same_light(const cf_capture *capture, size_t index, size_t slot) {
   size_t slots = (size_t)capture->max_lights;
-  const cf_light *mine = &capture->lights[index * slots];
-  for (size_t k = 0; k < index; ++k) { /* the first image with the same light */
-    const cf_light *other = &capture->lights[k * slots];
+  const cf_light *mine = &capture->lights[index * slots + slot];
+  for (size_t k = 0; k < index; ++k) {
+    const cf_light *other = &capture->lights[k * slots + slot];
     if (!memcmp(other->direction, mine->direction, sizeof mine->direction) &&
         !memcmp(other->intensity, mine->intensity, sizeof mine->intensity))
-      return (long)k;
+      return k;
   }
-  return (long)index;
+  return index;
+}
+
+/* The capture file's light (its index in spec->lights) of light slot
+ * `slot` (capture_load_lights' layout: an environment's `count` slots,
+ * one for any other light); num_lights past the last. */
+static size_t spec_light_of_slot(const cf_capture_spec *spec, size_t slot) {
+  size_t at = 0;
+  for (size_t i = 0; i < spec->num_lights; ++i) {
+    at += spec->lights[i].kind == CF_LIGHT_SPEC_ENVIRONMENT ? (size_t)spec->lights[i].count : 1;
+    if (slot < at) return i;
+  }
+  return spec->num_lights;
+}
+
+/* The capture file's lights at most (capture_spec.c refuses more). */
+enum { FILE_LIGHTS_MAX = 64 };
+
+size_t cf_capture_light_ids(const cf_capture *capture, long *ids) {
+  const cf_capture_spec *spec = &capture->spec;
+  size_t slots = (size_t)capture->max_lights, count = 0;
+  long whole[FILE_LIGHTS_MAX]; /* the id of each of the file's lights but directional_per_image */
+  for (size_t i = 0; i < FILE_LIGHTS_MAX; ++i) whole[i] = -1;
+  for (size_t k = 0; k < spec->num_images; ++k)
+    for (size_t j = 0; j < slots; ++j) {
+      const double *e = capture->lights[k * slots + j].intensity;
+      size_t i = spec_light_of_slot(spec, j);
+      long *id = &ids[k * slots + j];
+      if ((e[0] == 0.0 && e[1] == 0.0 && e[2] == 0.0) || i >= FILE_LIGHTS_MAX) {
+        *id = -1; /* no light: no gain */
+      } else if (spec->lights[i].kind == CF_LIGHT_SPEC_PER_IMAGE) {
+        size_t same = first_same_light(capture, k, j);
+        *id = same < k ? ids[same * slots + j] : (long)count++;
+      } else {
+        if (whole[i] < 0) whole[i] = (long)count++;
+        *id = whole[i];
+      }
+    }
+  return count;
+}
+
+void cf_capture_light_name(const cf_capture *capture, size_t image, int slot, char *text,
+                           size_t size) {
+  const cf_capture_spec *spec = &capture->spec;
+  size_t i = spec_light_of_slot(spec, (size_t)slot);
+  if (i >= spec->num_lights || image >= spec->num_images) {
+    snprintf(text, size, "no light");
+  } else if (spec->lights[i].kind == CF_LIGHT_SPEC_PER_IMAGE) {
+    size_t same = first_same_light(capture, image, (size_t)slot);
+    snprintf(text, size, "light %zu, row of %s", i + 1, capture->images[same].name);
+  } else {
+    snprintf(text, size, "light %zu%s", i + 1,
+             spec->lights[i].kind == CF_LIGHT_SPEC_ENVIRONMENT ? " (environment)" : "");
+  }
 }

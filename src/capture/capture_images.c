@@ -105,6 +105,21 @@ static void *reader(void *arg) {
 }
 
 /* Image k's observations from its decoded pixels. */
+/* A JPEG's coding, for the fit's model of its error: a file whose markers
+ * cannot be read is fitted without that model, and the capture says so. */
+static void read_jpeg_coding(cf_capture *capture, size_t k) {
+  cf_jpeg_coding coding;
+  cf_error err;
+  cf_capture_image *image = &capture->images[k];
+  if (cf_jpeg_coding_read(capture->spec.image_paths[k], &coding, &err) != CF_OK) {
+    capture_warn(capture, "%s; its JPEG coding error is not modelled", err.message);
+    return;
+  }
+  image->jpeg_quality = coding.quality;
+  image->jpeg_exact = coding.exact;
+  image->jpeg_chroma = (int)coding.chroma;
+}
+
 static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *mask,
                      cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
@@ -130,6 +145,7 @@ static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *
     capture->raw_exposures[k] = exposure;
     capture->images[k].exposure = exposure;
     capture->images[k].jpeg = strcmp(d->info.format, "jpeg") == 0;
+    if (capture->images[k].jpeg) read_jpeg_coding(capture, k);
     cf_decode decoding = capture_image_decode(capture, &d->info, exposure);
     s = capture_add_observations(capture, k, &d->image, mask, &decoding, err);
   }

@@ -129,6 +129,33 @@ static double to_linear(const cf_decode *decode, double stored) {
   return stored;
 }
 
+/* transfer: linear to stored value, and its derivative. */
+/* transfer: linear to stored value, and (slope not NULL) its derivative. */
+static double from_linear(const cf_decode *decode, double linear, double *slope) {
+  const double h = 1e-6; /* (the curves are smooth; central differences to ~1e-9) */
+  switch (decode->transfer) {
+    case CF_TRANSFER_SRGB:
+      if (slope)
+        *slope = (cf_linear_to_srgb(linear + h) - cf_linear_to_srgb(linear - h)) / (2.0 * h);
+      return cf_linear_to_srgb(linear);
+    case CF_TRANSFER_GAMMA: {
+      double a = fabs(linear), stored = pow(a, 1.0 / decode->gamma);
+      if (slope) *slope = a > 0.0 ? stored / (decode->gamma * a) : HUGE_VAL;
+      return linear < 0.0 ? -stored : stored;
+    }
+    case CF_TRANSFER_LINEAR:
+      break;
+  }
+  if (slope) *slope = 1.0;
+  return linear;
+}
+
+double cf_encode_value(const cf_decode *decode, double radiance, double *slope) {
+  double stored = from_linear(decode, radiance * decode->exposure + decode->black_level, slope);
+  if (slope) *slope *= decode->exposure;
+  return stored;
+}
+
 unsigned cf_decode_pixel(const cf_decode *decode, const float *stored, int channels,
                          double radiance[3]) {
   const int grey = channels < 3;

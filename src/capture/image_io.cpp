@@ -15,6 +15,7 @@
  * top). */
 #include <sys/stat.h>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cctype>
@@ -517,6 +518,64 @@ cf_status cf_image_write_jpeg(const char *path, const cf_image *image, int quali
 
 cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_error *err) {
   return cf_image_write_with_info(path, image, bits, nullptr, err);
+}
+
+namespace {
+
+/* cf_image_jpeg_roundtrip's body: code `in` into memory, decode it back. */
+cf_status jpeg_roundtrip(const cf_image *in, int quality, const char *subsampling, cf_image *out,
+                         cf_error *err) {
+  OIIO::Filesystem::IOVecOutput coded;
+  auto output = OIIO::ImageOutput::create("jpeg");
+  if (!output)
+    return cf_error_set(err, CF_EUNSUPPORTED, "OpenImageIO has no JPEG writer: %s",
+                        one_line(OIIO::geterror()).c_str());
+  OIIO::ImageSpec spec(in->width, in->height, in->channels, OIIO::TypeDesc::UINT8);
+  spec.attribute("Compression", "jpeg:" + std::to_string(quality));
+  spec.attribute("jpeg:subsampling", subsampling);
+  bool ok = output->set_ioproxy(&coded) && output->open("coded.jpg", spec);
+  ok = ok && output->write_image(OIIO::TypeDesc::FLOAT, in->pixels);
+  ok = output->close() && ok;
+  if (!ok)
+    return cf_error_set(err, CF_EIO, "coding a JPEG in memory failed: %s",
+                        one_line(output->geterror()).c_str());
+  OIIO::Filesystem::IOMemReader reader(coded.buffer().data(), coded.buffer().size());
+  auto input = OIIO::ImageInput::open("coded.jpg", nullptr, &reader);
+  if (!input)
+    return cf_error_set(err, CF_EIO, "decoding a JPEG from memory failed: %s",
+                        one_line(OIIO::geterror()).c_str());
+  cf_status s = cf_image_alloc(out, in->width, in->height, in->channels, err);
+  if (s == CF_OK && !input->read_image(0, 0, 0, in->channels, OIIO::TypeDesc::FLOAT, out->pixels)) {
+    cf_image_free(out);
+    s = cf_error_set(err, CF_EIO, "decoding a JPEG from memory failed: %s",
+                     one_line(input->geterror()).c_str());
+  }
+  input->close();
+  return s;
+}
+
+}  // namespace
+
+cf_status cf_image_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma, cf_image *out,
+                                  cf_error *err) {
+  *out = cf_image{};
+  if (!in || !in->pixels || in->width <= 0 || in->height <= 0 || in->channels != 3)
+    return cf_error_set(err, CF_EINVAL, "a JPEG round trip needs a 3-channel image");
+  if (quality < 1 || quality > 100)
+    return cf_error_set(err, CF_EINVAL, "JPEG quality %d is outside [1, 100]", quality);
+  const char *subsampling = chroma == CF_CHROMA_420   ? "4:2:0"
+                            : chroma == CF_CHROMA_422 ? "4:2:2"
+                                                      : "4:4:4";
+  try {
+    return jpeg_roundtrip(in, quality, subsampling, out, err);
+  } catch (const std::exception &e) {
+    drain_errors();
+    cf_image_free(out);
+    return cf_error_set(err, CF_EIO, "a JPEG round trip failed: %s", e.what());
+  } catch (...) {
+    cf_image_free(out);
+    return cf_error_set(err, CF_EIO, "a JPEG round trip failed (an unknown exception)");
+  }
 }
 
 }  // extern "C"

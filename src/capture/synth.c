@@ -239,12 +239,6 @@ static void render_pixel(const render_job *job, const synth_scene *scene, const 
   *covered = (double)hits / (s * s);
 }
 
-/* A normal deviate (Box-Muller). */
-static double gaussian(cf_rng *rng) {
-  double u1 = cf_rng_uniform(rng), u2 = cf_rng_uniform(rng);
-  return sqrt(-2.0 * log(1.0 - u1)) * cos(2.0 * SYNTH_PI * u2);
-}
-
 /* Photon and read noise, then what the file stores: the noise is added in
  * radiance units (so the capture's noise block holds after decoding), then
  * the image's exposure, and for integer formats the clip to [0, 1] and the
@@ -252,7 +246,7 @@ static double gaussian(cf_rng *rng) {
 static float stored_value(const render_job *job, double exposure, double radiance, cf_rng *rng) {
   const cf_synth_options *o = job->options;
   double variance = o->shot_noise * fmax(radiance, 0.0) + o->read_noise * o->read_noise;
-  double noisy = radiance + (variance > 0.0 ? sqrt(variance) * gaussian(rng) : 0.0);
+  double noisy = radiance + (variance > 0.0 ? sqrt(variance) * cf_rng_gaussian(rng) : 0.0);
   noisy *= exposure;
   if (o->format == CF_SYNTH_EXR) return (float)noisy;
   return (float)cf_response_encode(job->response, fmin(1.0, fmax(0.0, noisy)));

@@ -25,7 +25,7 @@ static void fit_usage(FILE *out) {
           "usage: clayfit fit CAPTURE -o OUTDIR [--model auto|M] [--hold name=value ...]\n"
           "                   [--free name ...] [--loss huber|cauchy|none] [--loss-scale K]\n"
           "                   [--fit-exposures | --fit-gains per-image|per-light|per-image-rgb]\n"
-          "                   [--no-multistart] [--density D]\n"
+          "                   [--no-multistart] [--jpeg-plain] [--density D]\n"
           "                   [--footprint auto|centre|S] [--footprint-tolerance T]\n"
           "                   [--budget N|all] [--sampling uniform|stratified|importance]\n"
           "                   [--max-iterations N] [--threads N] [--trace]\n\n"
@@ -51,7 +51,11 @@ static void fit_usage(FILE *out) {
           "                      one light for the images whose rows are the same), or\n"
           "                      per-image-rgb: a gain per image and channel (a white\n"
           "                      balance, for lights of different colours)\n"
-          "  --no-multistart     start from the closed-form albedo and defaults only\n"
+          "  --no-multistart     start from the closed-form albedo and defaults only\n");
+  fprintf(out,
+          "  --jpeg-plain        compare JPEG photos as they are; by default the fit's\n"
+          "                      prediction is coded as each photo's own tables and chroma\n"
+          "                      code it, and the codec's error taken out (docs/model.md 6.2)\n"
           "  --density D         the film's known thickness, for density and absorption\n"
           "                      (default: mean absorption 0.8, docs/model.md §3.6)\n"
           "  --footprint F       pixel footprints: auto (default) integrates a pixel with\n"
@@ -148,8 +152,14 @@ static void print_params(const cf_fit_result *r) {
   }
 }
 
-/* The fitted per-image gains e_k ± sd, four to a line. */
+/* The fitted per-image gains e_k ± sd, four to a line; or the gains per
+ * light g_l ± sd, one a line. */
 static void print_gains(const cf_fit_result *r, const cf_capture *capture) {
+  if (r->light_count > 0 && r->light_gains && r->light_gains_sd && r->light_names) {
+    printf("  gain per light (g_l ± sd inside each image's sum over its lights, mean log 0):\n");
+    for (size_t l = 0; l < r->light_count; ++l)
+      printf("    %-40s %.4f ± %.4f\n", r->light_names[l], r->light_gains[l], r->light_gains_sd[l]);
+  }
   if (!r->exposure_sd || r->images < 2) return;
   double low = HUGE_VAL, high = 0.0, worst = 0.0;
   for (size_t k = 0; k < r->images; ++k) {
@@ -342,6 +352,7 @@ static const struct option fit_long_options[] = {
     {"sampling", required_argument, NULL, 'S'},
     {"trace", no_argument, NULL, 'R'},
     {"max-image-memory", required_argument, NULL, 'G'},
+    {"jpeg-plain", no_argument, NULL, 'J'},
     {0}};
 
 /* The command line into cmd. Returns -1 to go on, else the exit status
@@ -382,6 +393,8 @@ static int parse_command(int argc, char **argv, fit_command *cmd, cf_status *s, 
         cmd->set.fit_exposures = CF_GAINS_NONE;
     } else if (c == 'M') {
       cmd->set.multistart = 0;
+    } else if (c == 'J') {
+      cmd->set.jpeg_plain = 1;
     } else if (c == 'R') {
       cmd->trace = 1;
     } else if (c == 'G') {

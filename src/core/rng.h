@@ -43,6 +43,12 @@ static inline double cf_rng_uniform(cf_rng *r) {
   return (double)(cf_rng_next(r) >> 11) * 0x1.0p-53;
 }
 
+/* A normal deviate (Box-Muller). */
+static inline double cf_rng_gaussian(cf_rng *r) {
+  double u1 = cf_rng_uniform(r), u2 = cf_rng_uniform(r);
+  return sqrt(-2.0 * log(1.0 - u1)) * cos(6.283185307179586477 * u2);
+}
+
 /* Uniform in [lo, hi]. */
 static inline double cf_rng_range(cf_rng *r, double lo, double hi) {
   return lo + (hi - lo) * cf_rng_uniform(r);

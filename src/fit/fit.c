@@ -23,6 +23,7 @@
 #include "fit_budget.h"
 #include "fit_footprint.h"
 #include "fit_gains.h"
+#include "fit_jpeg.h"
 #include "fit_hidden_base.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
@@ -41,12 +42,6 @@ enum {
   FOOTPRINT_ROUNDS = 3,
   TAU_ROUNDS = 4 /* sigma_through_curve */
 };
-/* τ's floor, in linear units (x = 1 the top code), a tenth of an 8-bit
- * photo's quantisation (1.1e-3): a noise-free float capture's τ (5e-9,
- * and still at a floor of 1e-6) let the solves wander off
- * (cli_fit_response: the diffuse roughness "not constrained", the albedo
- * 0.42 for 0.6); at 1e-4 it is exact to 1e-7 */
-#define TAU_FLOOR 1e-4
 
 void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
   memset(o, 0, sizeof *o);
@@ -207,8 +202,9 @@ static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const d
       r->scale_sd = exp(p->log_scale) * sqrt(fmax(0.0, var)); /* d s = s d log s */
     } else if (unk->kind == FIT_RESPONSE) {
       response_covariance(p, covariance, u, r);
-    } else if (unk->kind == FIT_LOG_EXPOSURE || unk->kind == FIT_LOG_BALANCE) {
-      continue; /* (fit_gains_sd, fit_balance_of) */
+    } else if (unk->kind == FIT_LOG_EXPOSURE || unk->kind == FIT_LOG_BALANCE ||
+               unk->kind == FIT_LOG_LIGHT) {
+      continue; /* (fit_gains_sd, fit_balance_of, fit_light_gains_of) */
     } else if (p->at_bound[u]) {
       r->status[unk->slot] = CF_PARAM_AT_BOUND;
       r->sd[unk->slot] = NAN;
@@ -340,15 +336,17 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
 static cf_status sigma_through_curve(fit_run *run, cf_error *err) {
   fit_problem *p = &run->p;
   double tau = run->sigma, before;
+  /* (no floor: at a noise-free float capture's τ, 5e-9, the response's
+   * prior is 1e-20 of the data, and still counts: the blocks and the
+   * covariance judge rank at a unit diagonal, lsq_blocks.cpp and
+   * fit_free_covariance) */
   cf_status s = fit_estimate_sigma(p, &tau, err); /* at the start's curve */
-  tau = fmax(tau, TAU_FLOOR);
   for (int round = 0; s == CF_OK && round < TAU_ROUNDS; ++round) {
     fit_problem_set_sigma(p, run->capture, tau);
     s = fit_problem_reweight(p, run->capture, err);
     if (s == CF_OK) s = fit_solve(p, run->o, run->o->max_iterations, &run->summary, err);
     before = tau;
     if (s == CF_OK) s = fit_estimate_sigma(p, &tau, err);
-    tau = fmax(tau, TAU_FLOOR);
     if (s != CF_OK || fabs(tau - before) < 0.01 * before) break;
   }
   if (s == CF_OK) {
@@ -502,6 +500,7 @@ static cf_status report_result(fit_run *run, cf_error *err) {
   const cf_fit_options *o = run->o;
   cf_fit_result *r = run->r;
   cf_status s = fill_result(p, &run->plan, run->covariance, r, err);
+  if (s == CF_OK) s = fit_light_gains_of(run->capture, p, run->covariance, r, err);
   if (s != CF_OK) return s;
   r->cost = run->summary.final_cost;
   r->iterations = p->iterations;
@@ -544,12 +543,23 @@ static cf_status report_result(fit_run *run, cf_error *err) {
   return CF_OK;
 }
 
-/* Steps 3 (on every observation) to 5, from the refined values. */
+/* Steps 3 (on every observation) to 5, from the refined values; JPEG
+ * photos are then compared with the prediction as their codec codes it,
+ * the codec's error taken at the solution (fit_jpeg.h), and solved again,
+ * once: further rounds, each taking the error at the last round's
+ * solution, drifted along the response curve's valley with the level
+ * (6 captures with an unknown curve at 320 × 240: 2-sd coverage 63 %
+ * after up to 4 rounds, 83 % after one; with a known curve a second round
+ * moved nothing by more than 0.13 sd). */
 static cf_status solve_population(fit_run *run, const double *params, double log_scale,
                                   const double *response, cf_error *err) {
   cf_status s = full_problem(run, params, log_scale, response, err);
   if (s == CF_OK) s = settle_weights_and_footprints(run, err);
   if (s == CF_OK) s = solve_until_constrained(run, err);
+  if (s == CF_OK && !run->o->jpeg_plain && fit_jpeg_modelled(run->capture)) {
+    s = fit_jpeg_correct(&run->p, run->capture, run->o, run->r, err);
+    if (s == CF_OK) s = solve_until_constrained(run, err);
+  }
   if (s == CF_OK) s = report_result(run, err);
   return s;
 }

@@ -90,6 +90,7 @@ static void fit_candidate(void *user, int i) {
   cf_fit_options o = w->options[m];
   o.model = (cf_model_id)m;
   o.progress = NULL;
+  o.jpeg_plain = 1; /* the candidates are scored on the photos as they are */
   if (w->side_by_side) o.threads = 1;
   cf_error err = {0};
   double clock = cf_now_seconds();

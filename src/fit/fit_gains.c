@@ -1,4 +1,4 @@
-/* Per-image gains (fit_gains.h, cf_fit_check_gains). */
+/* Per-image and per-light gains (fit_gains.h, cf_fit_check_gains). */
 #include "fit_gains.h"
 
 #include <math.h>
@@ -12,23 +12,69 @@
 #include "fit_residuals.h"
 #include "lsq/linalg.h"
 
-void fit_gains_sd(const fit_problem *p, const double *covariance, double *sd) {
-  int n = p->num_unknowns;
+/* sd(log g) of each gain of one kind (FIT_LOG_EXPOSURE: per group,
+ * FIT_LOG_LIGHT: per light) into sd[slot] (count: the groups or lights),
+ * the last one's from the sum of the others' covariance (its log is minus
+ * their sum); returns 0 (sd untouched) when none is free. */
+static int log_gain_sd(const fit_problem *p, fit_unknown_kind kind, const double *covariance,
+                       size_t count, double *sd) {
+  int n = p->num_unknowns, any = 0;
   double last = 0.0;
-  int any = 0;
-  for (size_t k = 0; k < p->images; ++k) sd[k] = 0.0;
-  for (int u = 0; u < n; ++u) { /* first sd(log e) per group, in sd[group] */
-    if (p->unknowns[u].kind != FIT_LOG_EXPOSURE) continue;
+  for (int u = 0; u < n; ++u) {
+    if (p->unknowns[u].kind != kind) continue;
     sd[p->unknowns[u].slot] = sqrt(fmax(0.0, covariance[u * n + u]));
     for (int v = 0; v < n; ++v)
-      if (p->unknowns[v].kind == FIT_LOG_EXPOSURE) last += covariance[u * n + v];
+      if (p->unknowns[v].kind == kind) last += covariance[u * n + v];
     any = 1;
   }
-  if (!any) return;
-  sd[p->gain_groups - 1] = sqrt(fmax(0.0, last));
+  if (any) sd[count - 1] = sqrt(fmax(0.0, last));
+  return any;
+}
+
+void fit_gains_sd(const fit_problem *p, const double *covariance, double *sd) {
+  for (size_t k = 0; k < p->images; ++k) sd[k] = 0.0;
+  /* first sd(log e) per group, in sd[group] */
+  if (!log_gain_sd(p, FIT_LOG_EXPOSURE, covariance, p->gain_groups, sd)) return;
   /* then per image (downward: an image's group is numbered at most its
    * own index, so sd[group] is still the group's when read) */
   for (size_t k = p->images; k-- > 0;) sd[k] = exp(p->log_exposures[k]) * sd[p->gain_group[k]];
+}
+
+/* The name of light l (its first slot in p->slot_light) into text. */
+static void light_name(const cf_capture *capture, const fit_problem *p, size_t l, char *text,
+                       size_t size) {
+  size_t lights = (size_t)p->lights;
+  for (size_t i = 0; i < p->images * lights; ++i)
+    if (p->slot_light[i] == (long)l) {
+      cf_capture_light_name(capture, i / lights, (int)(i % lights), text, size);
+      return;
+    }
+  snprintf(text, size, "no light");
+}
+
+static int lights_free(const fit_problem *p) {
+  for (int u = 0; u < p->num_unknowns; ++u)
+    if (p->unknowns[u].kind == FIT_LOG_LIGHT) return 1;
+  return 0;
+}
+
+cf_status fit_light_gains_of(const cf_capture *capture, const fit_problem *p,
+                             const double *covariance, cf_fit_result *r, cf_error *err) {
+  size_t count = p->light_count;
+  if (!lights_free(p)) return CF_OK;
+  r->light_gains = malloc(count * sizeof *r->light_gains);
+  r->light_gains_sd = calloc(count, sizeof *r->light_gains_sd);
+  r->light_names = malloc(count * sizeof *r->light_names);
+  if (!r->light_gains || !r->light_gains_sd || !r->light_names)
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu lights' gains", count);
+  r->light_count = count;
+  log_gain_sd(p, FIT_LOG_LIGHT, covariance, count, r->light_gains_sd);
+  for (size_t l = 0; l < count; ++l) {
+    r->light_gains[l] = exp(p->log_light[l]);
+    r->light_gains_sd[l] *= r->light_gains[l]; /* d g = g d log g */
+    light_name(capture, p, l, r->light_names[l], sizeof r->light_names[l]);
+  }
+  return CF_OK;
 }
 
 cf_status fit_balance_of(const fit_problem *p, int fitted, const double *covariance,
@@ -121,29 +167,64 @@ static cf_status check_problem(const cf_capture *capture, const cf_fit_options *
   return s;
 }
 
-/* jtj (n², the problem's unknowns) with the gains' unknowns moved last,
- * into moved (n²); returns their count. */
+static int is_gain(fit_unknown_kind kind) {
+  return kind == FIT_LOG_EXPOSURE || kind == FIT_LOG_LIGHT;
+}
+
+/* jtj (n², the problem's unknowns) with the gains' unknowns (per group or
+ * per light) moved last, into moved (n²); returns their count. */
 static int gains_last(const fit_problem *p, const double *jtj, double *moved, int *order) {
   int n = p->num_unknowns, m = 0, g = 0;
   for (int pass = 0; pass < 2; ++pass)
     for (int u = 0; u < n; ++u)
-      if ((p->unknowns[u].kind == FIT_LOG_EXPOSURE) == pass) order[m++] = u, g += pass;
+      if (is_gain(p->unknowns[u].kind) == pass) order[m++] = u, g += pass;
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b) moved[a * n + b] = jtj[order[a] * n + order[b]];
   return g;
 }
 
-/* The refusal, from the normal equations with the gains last (jtj): the
- * gains' block singular (the images of its weakest
- * direction named), or the gains whose sd is above FIT_GAIN_SD_MOST. */
-static cf_status judge_gains(const cf_capture *capture, const fit_problem *p, const double *jtj,
-                             cf_error *err) {
-  size_t images = p->images, groups = p->gain_groups;
+/* What the flagged gains (gain_flag: per group, or per light) are, into
+ * text: "images a, b", or "light 1; light 2 (in images a, b)"; image_flag
+ * (images) is scratch. */
+static void gain_subject(const cf_capture *capture, const fit_problem *p, int per_light,
+                         const unsigned char *gain_flag, unsigned char *image_flag, char *text,
+                         size_t size) {
+  char images[1024];
+  size_t lights = (size_t)p->lights, used = 0;
+  for (size_t k = 0; k < p->images; ++k) {
+    image_flag[k] = per_light ? 0 : gain_flag[p->gain_group[k]];
+    for (size_t j = 0; per_light && j < lights; ++j) {
+      long l = p->slot_light[k * lights + j];
+      image_flag[k] |= l >= 0 && gain_flag[l];
+    }
+  }
+  image_names(capture, image_flag, images, sizeof images);
+  if (!per_light) {
+    snprintf(text, size, "images %s", images);
+    return;
+  }
+  text[0] = '\0';
+  for (size_t l = 0; l < p->light_count && used + CF_FIT_LIGHT_NAME + 4 < size / 2; ++l) {
+    if (!gain_flag[l]) continue;
+    char name[CF_FIT_LIGHT_NAME];
+    light_name(capture, p, l, name, sizeof name);
+    used += (size_t)snprintf(text + used, size - used, "%s%s", used ? "; " : "", name);
+  }
+  snprintf(text + used, size - used, " (in images %s)", images);
+}
+
+/* The refusal, from the normal equations with the gains last (jtj; per
+ * group of images, or per light): the gains' block singular (the gains of
+ * its weakest direction named), or the gains whose sd is above
+ * FIT_GAIN_SD_MOST. */
+static cf_status judge_gains(const cf_capture *capture, const fit_problem *p, int per_light,
+                             const double *jtj, cf_error *err) {
+  size_t images = p->images, groups = per_light ? p->light_count : p->gain_groups;
   int n = p->num_unknowns, g = (int)groups - 1;
   double *covariance = malloc((size_t)g * (size_t)g * sizeof *covariance);
   double *weakest = malloc((size_t)g * sizeof *weakest), *part = malloc(groups * sizeof *part);
   unsigned char *flag = calloc(images + groups, 1), *group_flag = flag + images;
-  char names[1024];
+  char names[2048];
   if (!covariance || !weakest || !part || !flag) {
     free(covariance), free(weakest), free(part), free(flag);
     return cf_error_set(err, CF_ENOMEM, "out of memory for the gains' check");
@@ -156,59 +237,53 @@ static cf_status judge_gains(const cf_capture *capture, const fit_problem *p, co
     gain_parts(weakest, groups, part);
     double most = 0.0;
     for (size_t q = 0; q < groups; ++q) most = fmax(most, fabs(part[q]));
-    for (size_t k = 0; k < images; ++k) flag[k] = fabs(part[p->gain_group[k]]) > 0.3 * most;
-    image_names(capture, flag, names, sizeof names);
+    for (size_t q = 0; q < groups; ++q) group_flag[q] = fabs(part[q]) > 0.3 * most;
+    gain_subject(capture, p, per_light, group_flag, flag, names, sizeof names);
     s = cf_error_set(
         err, CF_EINVAL,
-        "the gains (--fit-exposures, --fit-gains) of images %s cannot be told from the material "
+        "the gains (--fit-exposures, --fit-gains) of %s cannot be told from the material "
         "(the gains' block of the normal equations, the material and the scale "
         "profiled out, is singular: their observations fix only their product with "
-        "it); drop the gains or these images",
-        names);
+        "it); drop the gains or these %s",
+        names, per_light ? "lights" : "images");
   } else {
     size_t over = 0;
     double worst = 0.0, total = 0.0;
     for (int a = 0; a < g; ++a) {
       double sd = sqrt(fmax(0.0, covariance[a * g + a]));
-      group_flag[a] = sd > FIT_GAIN_SD_MOST;
+      over += group_flag[a] = sd > FIT_GAIN_SD_MOST;
       worst = fmax(worst, sd);
       for (int b = 0; b < g; ++b) total += covariance[a * g + b];
     }
     double last = sqrt(fmax(0.0, total)); /* log e_last = −Σ the others */
-    group_flag[g] = last > FIT_GAIN_SD_MOST;
+    over += group_flag[g] = last > FIT_GAIN_SD_MOST;
     worst = fmax(worst, last);
-    for (size_t k = 0; k < images; ++k) over += flag[k] = group_flag[p->gain_group[k]];
-    image_names(capture, flag, names, sizeof names);
+    gain_subject(capture, p, per_light, group_flag, flag, names, sizeof names);
     if (over)
-      s = cf_error_set(
-          err, CF_EINVAL,
-          "the gains (--fit-exposures, --fit-gains) of %zu images are not told from the material "
-          "(predicted sd above %g %%, up to %.3g %%): %s; drop the gains or these "
-          "images",
-          over, 100.0 * FIT_GAIN_SD_MOST, 100.0 * worst, names);
+      s = cf_error_set(err, CF_EINVAL,
+                       "the gains (--fit-exposures, --fit-gains) of %s are not told from the "
+                       "material (predicted sd above %g %%, up to %.3g %%); drop the gains or "
+                       "these %s",
+                       names, 100.0 * FIT_GAIN_SD_MOST, 100.0 * worst,
+                       per_light ? "lights" : "images");
   }
   free(covariance), free(weakest), free(part), free(flag);
   return s;
 }
 
-/* A gain per light needs each image lit by one light, and two lights. */
-static cf_status check_lights(const cf_capture *capture, cf_error *err) {
-  size_t images = cf_capture_image_count(capture), lights = 0;
-  for (size_t k = 0; k < images; ++k) {
-    long light = cf_capture_image_light_id(capture, k);
-    if (light < 0)
-      return cf_error_set(err, CF_EINVAL,
-                          "--fit-gains per-light: image %s has several lights (the capture "
-                          "file's lights), and a gain per light among them is not supported; "
-                          "use --fit-gains per-image",
-                          cf_capture_image_at(capture, k)->name);
-    lights += (size_t)light == k;
-  }
-  if (lights < 2)
+/* A gain per light needs two lights, and at most FIT_IMAGE_LIGHTS in an
+ * image. */
+static cf_status check_lights(const fit_problem *p, cf_error *err) {
+  if (p->light_count < 2)
     return cf_error_set(err, CF_EINVAL,
                         "--fit-gains per-light: one light lights every image, so its gain is "
                         "the capture's overall scale, not a gain to fit (their mean log is 0); "
                         "use --fit-gains per-image for a gain per photo");
+  if (p->image_lights > FIT_IMAGE_LIGHTS)
+    return cf_error_set(err, CF_EINVAL,
+                        "--fit-gains per-light: an image has %d lights, more than the %d that a "
+                        "gain per light supports; use --fit-gains per-image",
+                        p->image_lights, FIT_IMAGE_LIGHTS);
   return CF_OK;
 }
 
@@ -219,23 +294,22 @@ cf_status cf_fit_check_gains(const cf_capture *capture, const cf_fit_options *o,
     return cf_error_set(err, CF_EINVAL, "invalid gains mode %d", o->fit_exposures);
   if (cf_capture_observations(capture)->count == 0)
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
-  if (o->fit_exposures == CF_GAINS_PER_LIGHT) {
-    cf_status lights = check_lights(capture, err);
-    if (lights != CF_OK) return lights;
-  }
   fit_problem p;
   fit_sample sample;
   fit_plan plan;
   cf_status s = check_problem(capture, o, &p, &sample, &plan, err);
   if (s != CF_OK) return s; /* (check_problem released what it made) */
-  size_t n = (size_t)p.num_unknowns;
+  int per_light = lights_free(&p);
+  size_t n = (size_t)p.num_unknowns, gains = per_light ? p.light_count : p.gain_groups;
   double *jtj = malloc(n * n * sizeof *jtj), *moved = malloc(n * n * sizeof *moved);
   int *order = malloc(n * sizeof *order);
-  s = jtj && moved && order ? fit_normal_equations(&p, fit_threads(o), jtj, NULL, NULL, err)
-                            : cf_error_set(err, CF_ENOMEM, "out of memory for the gains' check");
-  if (s == CF_OK && gains_last(&p, jtj, moved, order) != (int)p.gain_groups - 1)
+  if (o->fit_exposures == CF_GAINS_PER_LIGHT) s = check_lights(&p, err);
+  if (s == CF_OK)
+    s = jtj && moved && order ? fit_normal_equations(&p, fit_threads(o), jtj, NULL, NULL, err)
+                              : cf_error_set(err, CF_ENOMEM, "out of memory for the gains' check");
+  if (s == CF_OK && gains_last(&p, jtj, moved, order) != (int)gains - 1)
     s = cf_error_set(err, CF_EINVAL, "internal: the gains are not all free");
-  if (s == CF_OK) s = judge_gains(capture, &p, moved, err);
+  if (s == CF_OK) s = judge_gains(capture, &p, per_light, moved, err);
   free(jtj);
   free(moved);
   free(order);

@@ -1,7 +1,8 @@
-/* Per-image gains (--fit-exposures, docs/model.md §5.4): their standard
- * deviations from a fit's covariance, and the check before any fit that
- * the capture can tell them from the material (cf_fit_check_gains,
- * include/clayfit/fit.h). Private to src/fit. */
+/* Per-image and per-light gains (--fit-exposures, --fit-gains,
+ * docs/model.md §5.4): their standard deviations from a fit's
+ * covariance, and the check before any fit that the capture can tell them
+ * from the material (cf_fit_check_gains, include/clayfit/fit.h). Private
+ * to src/fit. */
 #ifndef CLAYFIT_FIT_GAINS_H
 #define CLAYFIT_FIT_GAINS_H
 
@@ -24,5 +25,12 @@ void fit_gains_sd(const fit_problem *p, const double *covariance, double *sd);
  * their sum). */
 cf_status fit_balance_of(const fit_problem *p, int fitted, const double *covariance,
                          cf_fit_result *r, cf_error *err);
+
+/* The gains per light inside the sums (FIT_LOG_LIGHT free; else nothing)
+ * into r (light_count, light_gains, light_gains_sd, light_names:
+ * allocated): g_l, g_l sd(log g_l) (the last light's variance the sum of
+ * the others' covariance) and each light's cf_capture_light_name. */
+cf_status fit_light_gains_of(const cf_capture *capture, const fit_problem *p,
+                             const double *covariance, cf_fit_result *r, cf_error *err);
 
 #endif /* CLAYFIT_FIT_GAINS_H */

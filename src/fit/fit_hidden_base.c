@@ -60,15 +60,18 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   int *at_bound = malloc((unknowns ? unknowns : 1) * sizeof *at_bound);
   double *log_exposures = malloc((p->images ? p->images : 1) * sizeof *log_exposures);
   double *log_balance = malloc(3 * (p->images ? p->images : 1) * sizeof *log_balance);
-  if (!at_bound || !log_exposures || !log_balance) {
+  double *log_light = malloc((p->light_count ? p->light_count : 1) * sizeof *log_light);
+  if (!at_bound || !log_exposures || !log_balance || !log_light) {
     free(at_bound);
     free(log_exposures);
     free(log_balance);
+    free(log_light);
     return cf_error_set(err, CF_ENOMEM, "out of memory");
   }
   memcpy(at_bound, p->at_bound, unknowns * sizeof *at_bound);
   memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
   memcpy(log_balance, p->log_balance, 3 * p->images * sizeof *log_balance);
+  memcpy(log_light, p->log_light, p->light_count * sizeof *log_light);
   fit_plan alone = *plan;
   double defaults[CF_MAX_DIM];
   cf_model_default_params(CF_MODEL_CLAY, defaults);
@@ -94,6 +97,7 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
     memcpy(p->response, response, sizeof response);
     memcpy(p->log_exposures, log_exposures, p->images * sizeof *log_exposures);
     memcpy(p->log_balance, log_balance, 3 * p->images * sizeof *log_balance);
+    memcpy(p->log_light, log_light, p->light_count * sizeof *log_light);
     cf_status restored = fit_declare(p, plan, err);
     if (restored == CF_OK) memcpy(p->at_bound, at_bound, unknowns * sizeof *at_bound);
     if (s == CF_OK) s = restored;
@@ -101,5 +105,6 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   free(at_bound);
   free(log_exposures);
   free(log_balance);
+  free(log_light);
   return s;
 }

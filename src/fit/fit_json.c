@@ -9,6 +9,7 @@
 
 #include "core/file.h"
 #include "core/json_reader.h"
+#include "fit_jpeg.h"
 
 static json_t *numbers(const double *x, int n) {
   json_t *array = json_array();
@@ -217,6 +218,15 @@ static json_t *per_image_json(const cf_fit_report *rep) {
   return per_image;
 }
 
+/* The gains per light inside the sums (docs/fitting.md), when fitted. */
+static json_t *light_gains_json(const cf_fit_result *r) {
+  json_t *lights = json_array();
+  for (size_t l = 0; l < r->light_count; ++l)
+    json_array_append_new(lights, json_pack("{s:s, s:f, s:f}", "light", r->light_names[l], "gain",
+                                            r->light_gains[l], "sd", r->light_gains_sd[l]));
+  return lights;
+}
+
 static json_t *starts_json(const cf_fit_result *r) {
   json_t *starts = json_array();
   for (int i = 0; i < r->starts; ++i)
@@ -283,6 +293,19 @@ static json_t *response_json(const cf_fit_result *r) {
       "values y, the linear value x = R^-1(y) and its sd from the slopes' covariance");
 }
 
+/* JPEG's coding error as the fit modelled it (fit_jpeg.h). */
+static json_t *jpeg_coding_json(const cf_fit_result *r) {
+  return json_pack(
+      "{s:i, s:i, s:f, s:[f, f, f], s:s}", "images", r->jpeg_images, "draws", FIT_JPEG_DRAWS,
+      "bias_rms_codes", r->jpeg_bias_rms, "bias_mean_codes", r->jpeg_bias_mean[0],
+      r->jpeg_bias_mean[1], r->jpeg_bias_mean[2], "meaning",
+      "the JPEG images' codec error, modelled: the photo with the fitted prediction on the "
+      "sphere (plus draws of the noise model) coded and decoded at each file's own quality and "
+      "chroma subsampling; the mean change at each observed pixel was taken out of the "
+      "measurements before the last solve. Its rms over the observed pixels and channels, and "
+      "its mean per channel, in codes of 1/255 (docs/model.md 6.2)");
+}
+
 /* The sections after the first json_pack (its format has room for no more). */
 static void add_later_sections(json_t *doc, const cf_fit_report *rep,
                                const cf_capture_summary *summary) {
@@ -299,6 +322,9 @@ static void add_later_sections(json_t *doc, const cf_fit_report *rep,
   json_object_set_new(doc, "sample", sample_json(r));
   json_object_set_new(json_object_get(doc, "solver"), "trace", numbers(r->trace, r->trace_count));
   json_object_set_new(doc, "response", response_json(r));
+  if (r->jpeg_images > 0) json_object_set_new(doc, "jpeg_coding", jpeg_coding_json(r));
+  if (r->light_count > 0 && r->light_gains && r->light_gains_sd && r->light_names)
+    json_object_set_new(doc, "light_gains", light_gains_json(r));
 }
 
 /* The capture's path relative to the folder of fit.json (data_schema/

@@ -170,9 +170,12 @@ static void run_job(void *user, int i) {
 static void prepare_job(start_job *job, const fit_problem *sub, const cf_fit_options *o,
                         const double *start, double log_scale, int width) {
   double *exposures = job->problem.log_exposures, *balance = job->problem.log_balance;
+  double *light = job->problem.log_light;
   job->problem = *sub;
   job->problem.log_exposures = exposures;
   job->problem.log_balance = balance;
+  job->problem.log_light = light;
+  memcpy(light, sub->log_light, sub->light_count * sizeof *light);
   memcpy(exposures, sub->log_exposures, sub->images * sizeof *exposures);
   memcpy(balance, sub->log_balance, 3 * sub->images * sizeof *balance);
   memcpy(job->problem.params, start, sizeof job->problem.params);
@@ -205,6 +208,8 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
               malloc((sub->images ? sub->images : 1) * sizeof(double))) ||
         !(jobs[j].problem.log_balance =
               malloc(3 * (sub->images ? sub->images : 1) * sizeof(double))) ||
+        !(jobs[j].problem.log_light =
+              malloc((sub->light_count ? sub->light_count : 1) * sizeof(double))) ||
         !(jobs[j].h = malloc((n ? n * n : 1) * sizeof(double))))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) {
@@ -254,6 +259,7 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
   for (int j = 0; jobs && j < width; ++j) {
     free(jobs[j].problem.log_exposures);
     free(jobs[j].problem.log_balance);
+    free(jobs[j].problem.log_light);
     free(jobs[j].h);
   }
   free(jobs);

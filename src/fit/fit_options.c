@@ -66,6 +66,7 @@ cf_status cf_fit_model_options(cf_model_id model, const cf_fit_options *settings
   o->loss = settings->loss;
   o->loss_scale = settings->loss_scale;
   o->fit_exposures = settings->fit_exposures;
+  o->jpeg_plain = settings->jpeg_plain;
   o->multistart = settings->multistart;
   o->max_iterations = settings->max_iterations;
   o->threads = settings->threads;

@@ -48,7 +48,11 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   for (int k = 0; k < p->dim; ++k)
     if (plan->status[k] == CF_PARAM_FITTED) fit_problem_free_slot(p, k);
   if (plan->scale) fit_problem_free_scale(p);
-  if (plan->exposures) {
+  /* a gain per light: per image's group where each image has one light,
+   * else inside the sums (fit_problem_free_light_gains) */
+  if (plan->exposures == CF_GAINS_PER_LIGHT && p->several_lights) {
+    fit_problem_free_light_gains(p);
+  } else if (plan->exposures) {
     fit_problem_group_gains(p, plan->exposures == CF_GAINS_PER_LIGHT);
     fit_problem_free_exposures(p);
   }

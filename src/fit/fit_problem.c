@@ -107,6 +107,36 @@ static void init_part(void *user, int part) {
   }
 }
 
+/* The capture's lights (cf_capture_light_ids) into p: slot_light,
+ * light_count, log_light (0), image_lights, several_lights and
+ * light_of_image. 0: no memory. */
+static int problem_lights(fit_problem *p, const cf_capture *capture) {
+  size_t lights = (size_t)p->lights, images = p->images ? p->images : 1;
+  p->slot_light = malloc(images * (lights ? lights : 1) * sizeof *p->slot_light);
+  if (!p->slot_light) return 0;
+  p->light_count = cf_capture_light_ids(capture, p->slot_light);
+  p->log_light = calloc(p->light_count ? p->light_count : 1, sizeof *p->log_light);
+  long *first = malloc((p->light_count ? p->light_count : 1) * sizeof *first);
+  if (!p->log_light || !first) return free(first), 0;
+  for (size_t l = 0; l < p->light_count; ++l) first[l] = -1;
+  for (size_t k = 0; k < p->images; ++k) {
+    const long *id = p->slot_light + k * lights;
+    int distinct = 0;
+    long only = -1;
+    for (size_t j = 0; j < lights; ++j) {
+      int seen = id[j] < 0;
+      for (size_t i = 0; i < j && !seen; ++i) seen = id[i] == id[j];
+      if (!seen) distinct += 1, only = id[j];
+    }
+    if (distinct == 1 && first[only] < 0) first[only] = (long)k;
+    p->light_of_image[k] = distinct == 1 ? first[only] : -1;
+    p->image_lights = distinct > p->image_lights ? distinct : p->image_lights;
+  }
+  p->several_lights = p->image_lights > 1;
+  free(first);
+  return 1;
+}
+
 cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_id model,
                            const uint32_t *index, size_t count, int threads, cf_error *err) {
   memset(p, 0, sizeof *p);
@@ -134,13 +164,12 @@ cf_status fit_problem_init(fit_problem *p, const cf_capture *capture, cf_model_i
   p->gain_group = malloc((p->images ? p->images : 1) * sizeof *p->gain_group);
   p->group_image = malloc((p->images ? p->images : 1) * sizeof *p->group_image);
   p->light_of_image = malloc((p->images ? p->images : 1) * sizeof *p->light_of_image);
-  for (size_t k = 0; p->light_of_image && k < p->images; ++k)
-    p->light_of_image[k] = cf_capture_image_light_id(capture, k);
   p->y = malloc(3 * (p->count ? p->count : 1) * sizeof *p->y);
   p->image = malloc((p->count ? p->count : 1) * sizeof *p->image);
   p->flags = malloc(p->count ? p->count : 1);
   if (!p->geometry || !p->weight || !p->inv_sigma || !p->log_exposures || !p->y || !p->image ||
-      !p->flags || !p->gain_group || !p->group_image || !p->light_of_image || !p->log_balance) {
+      !p->flags || !p->gain_group || !p->group_image || !p->light_of_image || !p->log_balance ||
+      !problem_lights(p, capture)) {
     fit_problem_release(p);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", p->count);
   }
@@ -186,6 +215,14 @@ typedef struct fit_scratch {
   int *exposure_u;   /* images: gain group g's unknown, or −1 */
   double *log_b;     /* 3 × images: the white balance */
   int *balance_u;    /* 2 × images: image k's red and blue balance's unknowns, or −1 */
+  /* the lights' gains inside the sums (fit_problem.slot_light): */
+  double *light_w;   /* 3 × pairs: the pairs' weights times their light's gain (f's allocation) */
+  size_t light_room; /* light_d's and light_i's parts have room for this many */
+  double *light_d, *log_g, *minus, *slot_gain; /* log g per light; −1s; each slot's g */
+  int *light_i, *light_u, *light_place, *last_places, *slot_entry, *entry_light;
+  /* each light's unknown (−1: none) and its place in the block; the places
+   * of every light's but the last's (its log gain is minus their sum); the
+   * image's slots' entries among its lights, and each entry's light */
 } fit_scratch;
 
 static void scratch_free_arrays(fit_scratch *s) {
@@ -198,6 +235,25 @@ static void scratch_free_arrays(fit_scratch *s) {
   free(s->exposure_u);
   free(s->log_b);
   free(s->balance_u);
+  free(s->light_d);
+  free(s->light_i);
+}
+
+/* Room in the scratch's light arrays for the problem's lights. */
+static int scratch_lights(fit_scratch *s, const fit_problem *p) {
+  size_t room = p->light_count + (size_t)p->lights + 1;
+  if (room <= s->light_room) return 1;
+  free(s->light_d);
+  free(s->light_i);
+  s->light_d = malloc(3 * room * sizeof *s->light_d);
+  s->light_i = malloc(5 * room * sizeof *s->light_i);
+  s->light_room = s->light_d && s->light_i ? room : 0;
+  if (!s->light_room) return 0;
+  s->log_g = s->light_d, s->minus = s->light_d + room, s->slot_gain = s->light_d + 2 * room;
+  s->light_u = s->light_i, s->light_place = s->light_i + room;
+  s->last_places = s->light_i + 2 * room, s->slot_entry = s->light_i + 3 * room;
+  s->entry_light = s->light_i + 4 * room;
+  return 1;
 }
 
 /* Room in the scratch for an evaluation of `pairs` pairs, with the
@@ -219,10 +275,12 @@ static int scratch_fit(fit_scratch *s, const fit_problem *p, size_t pairs, int j
   }
   if (pairs > s->pairs) {
     free(s->f);
-    s->f = malloc(3 * pairs * sizeof *s->f);
+    s->f = malloc(6 * pairs * sizeof *s->f); /* (then light_w) */
     s->pairs = s->f ? pairs : 0;
     if (!s->f) return 0;
+    s->light_w = s->f + 3 * pairs;
   }
+  if (!scratch_lights(s, p)) return 0;
   if (!jacobian) return 1;
   if (pairs > s->jacobian_pairs) {
     free(s->grad);
@@ -290,6 +348,8 @@ void fit_problem_release(fit_problem *p) {
   free(p->log_balance);
   free(p->group_image);
   free(p->light_of_image);
+  free(p->slot_light);
+  free(p->log_light);
   free(p->block_column_begin);
   free(p->block_column);
   free(p->sample_root);
@@ -395,6 +455,8 @@ void fit_problem_clear_unknowns(fit_problem *p) {
   p->num_unknowns = 0;
   p->unknowns_failed = 0;
   p->response_on = !fit_response_is_identity(p->response);
+  p->light_gains_on = 0;
+  for (size_t l = 0; l < p->light_count; ++l) p->light_gains_on |= p->log_light[l] != 0.0;
 }
 
 /* Room for `capacity` unknowns in the unknowns' arrays (kept as they are). */
@@ -474,14 +536,21 @@ void fit_problem_free_exposures(fit_problem *p) {
     add_unknown(p, FIT_LOG_EXPOSURE, (int)g, -HUGE_VAL, HUGE_VAL);
 }
 
+void fit_problem_free_light_gains(fit_problem *p) {
+  for (size_t l = 0; l + 1 < p->light_count; ++l) /* (contiguous, in the lights' order) */
+    add_unknown(p, FIT_LOG_LIGHT, (int)l, -HUGE_VAL, HUGE_VAL);
+  p->light_gains_on = p->light_count > 1;
+}
+
 void fit_problem_free_balance(fit_problem *p) {
   for (size_t k = 0; k + 1 < p->images; ++k)
     for (int j = 0; j < 2; ++j)
       add_unknown(p, FIT_LOG_BALANCE, (int)(2 * k) + j, -HUGE_VAL, HUGE_VAL);
 }
 
-/* The blocks and their columns: the model's, the scale's and the
- * response's in every block; a gain's where its group's images are (every
+/* The blocks and their columns: the model's, the scale's, the
+ * response's and the lights' gains in every block (a capture has few
+ * lights); a gain's where its group's images are (every
  * gain where the last group's are), a white balance's where its image is
  * (every one where the last image is). */
 cf_status fit_problem_finish(fit_problem *p, cf_error *err) {
@@ -539,6 +608,7 @@ void fit_problem_get_x(const fit_problem *p, double *x) {
            : u->kind == FIT_LOG_SCALE   ? p->log_scale
            : u->kind == FIT_RESPONSE    ? p->response[u->slot]
            : u->kind == FIT_LOG_BALANCE ? p->log_balance[3 * (u->slot / 2) + 2 * (u->slot % 2)]
+           : u->kind == FIT_LOG_LIGHT   ? p->log_light[u->slot]
                                         : p->log_exposures[p->group_image[u->slot]];
   }
 }
@@ -554,17 +624,28 @@ static void balance_at(const fit_problem *p, const double *x, int first, double 
   log_balance[3 * (p->images - 1) + 2] = -sum[1];
 }
 
+/* The lights' log gains x stands for (from x[first]; the last light's
+ * minus the others' sum), into log_light (light_count). */
+static void light_gains_at(const fit_problem *p, const double *x, int first, double *log_light) {
+  double sum = 0.0;
+  for (size_t l = 0; l + 1 < p->light_count; ++l) sum += log_light[l] = x[first + (int)l];
+  log_light[p->light_count - 1] = -sum;
+}
+
 /* The values x stands for: params, log s, the response's slopes, log e_k
- * of every image (its gain group's; the last group's from the others) and
- * the white balance (3 × images; NULL: not wanted). */
+ * of every image (its gain group's; the last group's from the others),
+ * the white balance (3 × images; NULL: not wanted) and the lights' log
+ * gains (light_count; NULL: not wanted). */
 static void values_at(const fit_problem *p, const double *x, double *params, double *log_scale,
-                      double *response, double *log_exposures, double *log_balance) {
+                      double *response, double *log_exposures, double *log_balance,
+                      double *log_light) {
   memcpy(params, p->params, sizeof p->params);
   *log_scale = p->log_scale;
   memcpy(response, p->response, sizeof p->response);
   if (log_exposures) memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
   if (log_balance) memcpy(log_balance, p->log_balance, 3 * p->images * sizeof *log_balance);
-  int first_gain = -1, first_balance = -1;
+  if (log_light) memcpy(log_light, p->log_light, p->light_count * sizeof *log_light);
+  int first_gain = -1, first_balance = -1, first_light = -1;
   for (int i = 0; i < p->num_unknowns; ++i) {
     const fit_unknown *u = &p->unknowns[i];
     if (u->kind == FIT_MODEL_SLOT)
@@ -581,7 +662,10 @@ static void values_at(const fit_problem *p, const double *x, double *params, dou
       first_balance = i; /* contiguous, image k's red and blue at 2k, 2k + 1 */
     else if (u->kind == FIT_LOG_EXPOSURE && first_gain < 0)
       first_gain = i; /* the gains' unknowns: contiguous, group g at first_gain + g */
+    else if (u->kind == FIT_LOG_LIGHT && first_light < 0)
+      first_light = i; /* contiguous, light l at first_light + l */
   }
+  if (first_light >= 0 && log_light) light_gains_at(p, x, first_light, log_light);
   if (first_balance >= 0 && log_balance) balance_at(p, x, first_balance, log_balance);
   if (first_gain >= 0 && log_exposures) {
     double sum = 0.0;
@@ -595,7 +679,7 @@ static void values_at(const fit_problem *p, const double *x, double *params, dou
 
 void fit_problem_set_x(fit_problem *p, const double *x) {
   double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
-  values_at(p, x, params, &log_scale, response, p->log_exposures, p->log_balance);
+  values_at(p, x, params, &log_scale, response, p->log_exposures, p->log_balance, p->log_light);
   memcpy(p->params, params, sizeof params);
   p->log_scale = log_scale;
   memcpy(p->response, response, sizeof response);
@@ -672,7 +756,7 @@ static int slot_channel(cf_model_id model, int slot) {
  * gain (the scale's and the image's exposure's derivative, which are the
  * same), then the response. Rows add here without indirection; the sums go
  * to the block's columns when the image changes (fit_problem_evaluate). */
-enum { LOCAL_MAX = CF_MAX_DIM + 1 + CF_RESPONSE_MODEL_KNOTS };
+enum { LOCAL_MAX = CF_MAX_DIM + 1 + CF_RESPONSE_MODEL_KNOTS + FIT_IMAGE_LIGHTS };
 typedef struct local_normal {
   int size;
   double a[LOCAL_MAX][LOCAL_MAX]; /* lower triangle */
@@ -724,17 +808,28 @@ static void local_add(local_normal *n, const double *v, double u) {
 
 /* Where the local indices go: one column each, but the log gain's, which
  * goes to the scale's and the image's exposure's columns (or, for the last
- * image, to minus every exposure's). */
+ * image, to minus every exposure's), and the image's lights' (the last
+ * light's to minus every other light's). */
 typedef struct local_map {
   int column[LOCAL_MAX];
   int gain; /* the log gain's local index, or −1 */
   const int *gain_column;
   const double *gain_sign;
   int gain_count;
+  /* the image's lights' gains: local indices light_first … + light_entries */
+  int light_first, light_entries, last_count;
+  const fit_scratch *s;
+  size_t last_light;
 } local_map;
 
 static int local_targets(const local_map *map, int i, const int **column, const double **sign) {
   static const double one = 1.0;
+  if (i >= map->light_first && i < map->light_first + map->light_entries) {
+    int l = map->s->entry_light[i - map->light_first];
+    *column = (size_t)l == map->last_light ? map->s->last_places : &map->s->light_place[l];
+    *sign = (size_t)l == map->last_light ? map->s->minus : &one;
+    return (size_t)l == map->last_light ? map->last_count : 1;
+  }
   if (i == map->gain) {
     *column = map->gain_column;
     *sign = map->gain_sign;
@@ -809,6 +904,41 @@ static double model_value(const double *w, const double *f, const double *grad, 
   return value;
 }
 
+/* Image `image`'s slots' gains g_l (slot_gain, lights; 1 for a slot
+ * without light) from the lights' log gains. */
+static void image_slot_gains(const fit_problem *p, const double *log_g, uint32_t image,
+                             double *slot_gain) {
+  const long *id = p->slot_light + (size_t)image * (size_t)p->lights;
+  for (int j = 0; j < p->lights; ++j) slot_gain[j] = id[j] < 0 ? 1.0 : exp(log_g[id[j]]);
+}
+
+/* An observation's pair weights (w, 3 per pair) times their lights' gains,
+ * into out; pair j is light slot j mod lights (fit_problem.slot_begin). */
+static const double *light_weighted(const fit_problem *p, const double *slot_gain, const double *w,
+                                    size_t slots, double *out) {
+  for (size_t j = 0; j < slots; ++j) {
+    double g = slot_gain[j % (size_t)p->lights];
+    for (int c = 0; c < 3; ++c) out[3 * j + (size_t)c] = g * w[3 * j + (size_t)c];
+  }
+  return out;
+}
+
+/* Image `image`'s lights as local entries: slot_entry[j] (lights; −1: no
+ * light) and entry_light[q]; returns their count (at most FIT_IMAGE_LIGHTS,
+ * which the check before the fit enforces). */
+static int image_entries(const fit_problem *p, uint32_t image, int *slot_entry, int *entry_light) {
+  const long *id = p->slot_light + (size_t)image * (size_t)p->lights;
+  int count = 0;
+  for (int j = 0; j < p->lights; ++j) {
+    slot_entry[j] = -1;
+    for (int q = 0; q < count && id[j] >= 0 && slot_entry[j] < 0; ++q)
+      if (entry_light[q] == id[j]) slot_entry[j] = q;
+    if (id[j] >= 0 && slot_entry[j] < 0 && count < FIT_IMAGE_LIGHTS)
+      entry_light[count] = (int)id[j], slot_entry[j] = count++;
+  }
+  return count;
+}
+
 /* The prediction μ of a channel from its linear value, gain · model
  * (docs/model.md (40)): the linear value itself, or with a response
  * curve, R(linear) (0 where the linear value is not positive: no light,
@@ -840,6 +970,8 @@ typedef struct block_eval {
   int response_free;       /* any slope free */
   int exposures;           /* any exposure free (s->exposure_u: whose) */
   int balance;             /* any white balance free (s->balance_u: whose) */
+  int light_on;            /* the lights' gains apply (fit_problem.light_gains_on) */
+  int light_free;          /* any light's gain free (s->light_u: whose) */
 } block_eval;
 
 /* The normal equations of a block over its k columns, and each channel's
@@ -850,6 +982,11 @@ typedef struct block_normal {
   int k;
   local_normal local[3];
   local_map map[3];
+  /* fit_problem_group_scores: each row's −Jᵀu into its group's score
+   * (score[group[row] × unknowns + u]) instead of the sums (NULL: the sums) */
+  double *score;
+  const size_t *group;
+  const int *columns; /* the block's columns' unknowns */
 } block_normal;
 
 /* The values x stands for (values_at; σ² unknowns evaluated at σ >= 1e-6,
@@ -859,13 +996,15 @@ typedef struct block_normal {
  * image's exposure's, and per channel the model's. */
 static void unknowns_at(block_eval *e, const double *x) {
   const fit_problem *p = e->p;
-  values_at(p, x, e->params, &e->log_scale, e->response, e->s->log_e, e->s->log_b);
+  values_at(p, x, e->params, &e->log_scale, e->response, e->s->log_e, e->s->log_b, e->s->log_g);
   e->scale_u = -1;
   e->response_free = 0;
   for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) e->response_u[j] = -1;
   e->exposures = e->balance = 0;
   for (size_t i = 0; i < p->images; ++i) e->s->exposure_u[i] = -1;
   for (size_t i = 0; i < 2 * p->images; ++i) e->s->balance_u[i] = -1;
+  for (size_t l = 0; l < p->light_count; ++l) e->s->light_u[l] = -1;
+  e->light_on = p->light_gains_on, e->light_free = 0;
   for (int u = 0; u < p->num_unknowns; ++u) {
     const fit_unknown *unk = &p->unknowns[u];
     if (unk->kind == FIT_SQUARE_SLOT) e->params[unk->slot] = fmax(e->params[unk->slot], 1e-6);
@@ -877,6 +1016,8 @@ static void unknowns_at(block_eval *e, const double *x) {
       e->s->exposure_u[unk->slot] = u, e->exposures = 1;
     else if (unk->kind == FIT_LOG_BALANCE)
       e->s->balance_u[unk->slot] = u, e->balance = 1;
+    else if (unk->kind == FIT_LOG_LIGHT)
+      e->s->light_u[unk->slot] = u, e->light_free = 1;
   }
   for (int c = 0; c < 3; ++c) e->channel_count[c] = 0;
   for (int u = 0; u < p->num_unknowns; ++u) {
@@ -920,7 +1061,16 @@ static void normal_layout(const block_eval *e, size_t block, block_normal *n) {
     lm->gain_column = e->s->gain_column + (size_t)c * stride;
     lm->gain_sign = e->s->gain_sign + (size_t)c * stride;
     lm->gain_count = 0;
-    n->local[c].size = size;
+    n->local[c].size = lm->light_first = size; /* (the image's lights after: next_image) */
+    lm->light_entries = 0;
+    lm->s = e->s;
+    lm->last_light = p->light_count - 1;
+    lm->last_count = p->light_count > 0 ? (int)p->light_count - 1 : 0;
+  }
+  for (size_t l = 0; e->light_free && l < p->light_count; ++l) {
+    int u = e->s->light_u[l];
+    e->s->light_place[l] = u >= 0 ? place[u] : -1;
+    if (l + 1 < p->light_count) e->s->last_places[l] = e->s->light_place[l], e->s->minus[l] = -1.0;
   }
 }
 
@@ -973,6 +1123,37 @@ static void next_image(const block_eval *e, block_normal *n, int had_image, uint
     }
     n->map[c].gain_count = balance_columns(e, image, c, column, sign, count);
   }
+  int entries = e->light_free ? image_entries(p, image, e->s->slot_entry, e->s->entry_light) : 0;
+  for (int c = 0; c < 3; ++c)
+    n->map[c].light_entries = entries, n->local[c].size = n->map[c].light_first + entries;
+}
+
+/* Channel c's derivatives in the image's lights' log gains into v: ∂μ/∂
+ * log g_l = factor · Σ over light l's pairs of w f (factor: R' s e_k b_kc
+ * times the row's scale; w with the gains: light_weighted). Returns
+ * their count. */
+static int light_rows(const block_eval *e, const local_map *map, int c, size_t first, size_t slots,
+                      const double *w, double factor, double *v) {
+  double share[FIT_IMAGE_LIGHTS] = {0.0};
+  for (size_t j = 0; j < slots; ++j) {
+    int q = e->s->slot_entry[j % (size_t)e->p->lights];
+    if (q >= 0) share[q] += w[3 * j + (size_t)c] * e->f[3 * (first + j) + (size_t)c];
+  }
+  for (int q = 0; q < map->light_entries; ++q) v[q] = factor * share[q];
+  return map->light_entries;
+}
+
+/* Row `row`'s channel c with its row v of J and residual u (channel_row)
+ * into its group's score: −v u, each local index to its columns. */
+static void score_add(const fit_problem *p, block_normal *n, size_t row, int c, const double *v,
+                      double u) {
+  double *score = n->score + n->group[row] * (size_t)p->num_unknowns;
+  for (int i = 0; i < n->local[c].size; ++i) {
+    const int *column;
+    const double *sign;
+    int count = local_targets(&n->map[c], i, &column, &sign);
+    for (int t = 0; t < count; ++t) score[n->columns[column[t]]] -= sign[t] * v[i] * u;
+  }
 }
 
 /* Channel c of row `row` (its `slots` pairs from `first` in f and grad,
@@ -1012,7 +1193,12 @@ static double channel_row(const block_eval *e, block_normal *n, size_t row, int 
   if (n->map[c].gain >= 0) v[m++] = scale * chain * linear;
   for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j)
     if (e->response_u[j] >= 0) v[m++] = scale * dslope[j];
-  local_add(&n->local[c], v, u);
+  if (n->map[c].light_entries)
+    m += light_rows(e, &n->map[c], c, first, slots, w, scale * chain * gain, v + m);
+  if (n->score)
+    score_add(p, n, row, c, v, u);
+  else
+    local_add(&n->local[c], v, u);
   return share;
 }
 
@@ -1032,6 +1218,7 @@ static int evaluate_rows(const block_eval *e, block_normal *n, size_t begin, siz
     if (image != gain_image) {
       for (int c = 0; c < 3; ++c)
         gain[c] = image_gain(e->log_scale, e->s->log_e[image] + e->s->log_b[3 * image + c]);
+      if (e->light_on) image_slot_gains(p, e->s->log_g, image, e->s->slot_gain);
       if (n) next_image(e, n, gain_image != UINT32_MAX, image);
       gain_image = image;
     }
@@ -1039,6 +1226,7 @@ static int evaluate_rows(const block_eval *e, block_normal *n, size_t begin, siz
     size_t slots = fit_problem_slot_range(p, row, &first);
     const double *w = p->weight + 3 * first;
     first -= e->first_pair; /* into f and grad */
+    if (e->light_on) w = light_weighted(p, e->s->slot_gain, w, slots, e->s->light_w + 3 * first);
     for (int c = 0; c < 3; ++c) sum += channel_row(e, n, row, c, first, slots, w, gain[c]);
     finite = isfinite(sum); /* the shares are >= 0: one not finite leaves the sum so */
   }
@@ -1126,6 +1314,40 @@ int fit_problem_block_columns(void *user, size_t block, const int **columns) {
   return (int)(p->block_column_begin[block + 1] - p->block_column_begin[block]);
 }
 
+cf_status fit_problem_group_scores(const fit_problem *p, const size_t *group, double *score,
+                                   cf_error *err) {
+  size_t k = (size_t)p->num_unknowns;
+  double *x = malloc((k ? k : 1) * sizeof *x), *jtj = malloc((k ? k * k : 1) * sizeof *jtj);
+  double *jtu = malloc((k ? k : 1) * sizeof *jtu), total;
+  block_eval e = {.p = p, .s = scratch_take(p)};
+  cf_status s = x && jtj && jtu && e.s ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) fit_problem_get_x(p, x);
+  /* (the local sums stay 0: jtj and jtu are where evaluate_rows flushes them) */
+  block_normal n = {.jtj = jtj, .jtu = jtu, .score = score, .group = group};
+  for (size_t b = 0; s == CF_OK && b < p->num_blocks; ++b) {
+    size_t begin, count;
+    size_t pairs = block_pairs(p, b, &begin, &count, &e.first_pair);
+    if (!scratch_fit(e.s, p, pairs, 1)) {
+      s = cf_error_set(err, CF_ENOMEM, "out of memory");
+      break;
+    }
+    e.f = e.s->f;
+    e.grad = e.s->grad;
+    unknowns_at(&e, x);
+    normal_layout(&e, b, &n);
+    n.columns = p->block_column + p->block_column_begin[b];
+    if (cf_eval_batch(p->model, e.params, pairs, p->geometry + e.first_pair, e.f, e.grad) !=
+            CF_OK ||
+        !evaluate_rows(&e, &n, begin, count, &total))
+      s = cf_error_set(err, CF_ENUMERIC, "the fit's Jacobian is not finite at its values");
+  }
+  scratch_give(e.s);
+  free(x);
+  free(jtj);
+  free(jtu);
+  return s;
+}
+
 /* A range of rows' predictions (fit_problem_predict), on one thread. */
 typedef struct predict_job {
   const fit_problem *p;
@@ -1161,12 +1383,16 @@ static void predict_part(void *user, int part) {
       for (int c = 0; c < 3; ++c)
         gain[c] = image_gain(p->log_scale, p->log_exposures[gain_image] +
                                                p->log_balance[3 * (size_t)gain_image + (size_t)c]);
+      if (p->light_gains_on) image_slot_gains(p, p->log_light, gain_image, s->slot_gain);
     }
+    const double *w = p->weight + 3 * first;
+    if (p->light_gains_on)
+      w = light_weighted(p, s->slot_gain, w, slots, s->light_w + 3 * (first - first_pair));
     for (int c = 0; c < 3; ++c) {
       const double *dmodel;
       double weight_one;
-      double model = model_value(p->weight + 3 * first, s->f, NULL, p->dim, first - first_pair,
-                                 slots, c, NULL, &dmodel, &weight_one);
+      double model = model_value(w, s->f, NULL, p->dim, first - first_pair, slots, c, NULL, &dmodel,
+                                 &weight_one);
       job->prediction[3 * i + (size_t)c] =
           predict_channel(p->response_on, p->response, gain[c] * model, NULL, NULL);
       job->measured[3 * i + (size_t)c] = p->y[3 * i + (size_t)c];

@@ -38,9 +38,14 @@ typedef enum fit_unknown_kind {
                        (fit_problem.gain_group; per image, the group is
                        the image); the last group's is minus the sum of the
                        others: their mean log is 0 */
-  FIT_LOG_BALANCE   /* log b of image slot / 2's red (slot even) or blue
+  FIT_LOG_BALANCE,  /* log b of image slot / 2's red (slot even) or blue
                        gain against its green (--fit-gains per-image-rgb);
                        the last image's is minus the sum of the others' */
+  FIT_LOG_LIGHT     /* log g of light `slot` (fit_problem.slot_light), inside
+                       the sum over an image's lights (--fit-gains per-light
+                       where an image has several): the prediction is
+                       R(s e_k Σ_j g_l(j) f E_j c_j); the last light's is
+                       minus the sum of the others': their mean log is 0 */
 } fit_unknown_kind;
 
 /* Is an unknown one of the model's slots (not the scale, an exposure or
@@ -98,10 +103,20 @@ typedef struct fit_problem {
    * gain_group[k] (images; per image the group is k, per light the images
    * one light lights alone, fit_problem_group_gains), gain_groups in all,
    * the first image of each group in group_image; light_of_image[k] is
-   * cf_capture_image_light_id */
+   * the first image of image k's only light (−1: it has none or several) */
   uint32_t *gain_group, *group_image;
   size_t gain_groups;
   long *light_of_image;
+  /* the capture's lights (cf_capture_light_ids): image k's slot j is light
+   * slot_light[k × lights + j] (−1: none), light_count in all; an image
+   * has at most image_lights of them, several_lights: some image has
+   * two or more. Their gains g_l inside each image's sum, as log g_l
+   * (light_count; 0: 1), apply with light_gains_on (they are free, or
+   * not all 1) */
+  long *slot_light;
+  size_t light_count;
+  int image_lights, several_lights, light_gains_on;
+  double *log_light;
   /* the white balance per image and channel: log b, 3 × images (green's
    * 0; all 0 unless fitted, fit_problem_free_balance); channel c of image
    * k has the gain s e_k b_kc */
@@ -252,8 +267,15 @@ void fit_problem_free_scale(fit_problem *p);
 void fit_problem_free_exposures(fit_problem *p);
 /* The gains' groups for fit_problem_free_exposures: one per image, or
  * (per_light) one per light, the images one light lights alone sharing
- * it (an image of no single light, id −1, keeps a group of its own). */
+ * it (an image of no single light, light_of_image −1, keeps a group of
+ * its own). */
 void fit_problem_group_gains(fit_problem *p, int per_light);
+/* A gain per light inside each image's sum over its lights (where an
+ * image has several): light_count − 1 free log gains, the last light's
+ * minus their sum. At most FIT_IMAGE_LIGHTS lights an image (the check
+ * before the fit refuses more: cf_fit_check_gains). */
+#define FIT_IMAGE_LIGHTS 8
+void fit_problem_free_light_gains(fit_problem *p);
 /* The white balance free: the red and blue gains of every image against
  * its green, their mean log over the images 0 per channel (a gain per
  * image, fit_problem_free_exposures, gives the green's). */
@@ -289,8 +311,17 @@ void fit_problem_set_x(fit_problem *p, const double *x);
 int fit_problem_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
                          double *jtu);
 
+/* The score of groups of observations at the current values: score[g ×
+ * num_unknowns + u] += Σ ψ ∂μ/∂x_u over the channels of the observations
+ * i with group[i] = g, with ψ = w ρ'(e²) e / σ, e = (y − μ)/σ (a clipped
+ * channel's e and slope from the censored likelihood; 0 where censored
+ * outright): each row's −Jᵀu, from the analytic Jacobian, without the
+ * response's prior. */
+cf_status fit_problem_group_scores(const fit_problem *p, const size_t *group, double *score,
+                                   cf_error *err);
+
 /* lsq.h's block_columns: the unknowns block `block` depends on (every
- * model slot, the scale and the response; the gains of its images' groups,
+ * model slot, the scale, the response and the lights' gains; the gains of its images' groups,
  * all of them when it holds an image of the last group, whose log gain is
  * minus their sum; the same for the white balance by image). */
 int fit_problem_block_columns(void *user, size_t block, const int **columns);

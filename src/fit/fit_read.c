@@ -504,6 +504,37 @@ static cf_status read_residuals(const json_t *root, const json_at *at, cf_fit_re
   return get_nonneg(rest, &rh, "relative_rmse", &r->rest_relative_rmse, err);
 }
 
+/* The gains per light (light_gains; absent: none), each light's name,
+ * gain and sd. */
+static cf_status read_light_gains(const json_t *root, const json_at *at, cf_fit_result *r,
+                                  cf_error *err) {
+  const json_t *lights;
+  int found = 0;
+  TRY(json_get_array(root, at, "light_gains", 0, &lights, &found, err));
+  if (!found) return CF_OK;
+  json_at here = json_member_at(at, "light_gains");
+  size_t n = json_array_size(lights);
+  if (n < 2) return json_fail(&here, err, CF_EPARSE, "needs 2 lights or more, has %zu", n);
+  r->light_gains = malloc(n * sizeof *r->light_gains);
+  r->light_gains_sd = malloc(n * sizeof *r->light_gains_sd);
+  r->light_names = malloc(n * sizeof *r->light_names);
+  if (!r->light_gains || !r->light_gains_sd || !r->light_names)
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory for %zu lights", here.file, n);
+  r->light_count = n;
+  static const char *const keys[] = {"light", "gain", "sd", NULL};
+  for (size_t l = 0; l < n; ++l) {
+    json_at e = json_element_at(&here, l);
+    const json_t *item = json_array_get(lights, l);
+    if (!json_is_object(item))
+      return json_fail(&e, err, CF_EPARSE, "expected an object, got %s", json_type_name(item));
+    TRY(json_check_keys(item, &e, keys, err));
+    TRY(get_text(item, &e, "light", r->light_names[l], sizeof r->light_names[l], err));
+    TRY(json_get_number(item, &e, "gain", 1, 1e-300, HUGE_NUMBER, &r->light_gains[l], NULL, err));
+    TRY(get_nonneg(item, &e, "sd", &r->light_gains_sd[l], err));
+  }
+  return CF_OK;
+}
+
 static cf_status read_solver(const json_t *root, const json_at *at, cf_fit_result *r,
                              cf_error *err) {
   const json_t *obj;
@@ -715,6 +746,27 @@ static cf_status read_response(const json_t *root, const json_at *at, cf_fit_res
 }
 
 /* The pixel budget's sample, or null. */
+/* The optional JPEG coding block (fit_json.c's jpeg_coding_json). */
+static cf_status read_jpeg_coding(const json_t *root, const json_at *at, cf_fit_result *r,
+                                  cf_error *err) {
+  const json_t *obj;
+  int found;
+  TRY(json_get_object(root, at, "jpeg_coding", 0, &obj, &found, err));
+  if (!found) return CF_OK;
+  json_at here = json_member_at(at, "jpeg_coding");
+  static const char *const known[] = {"images", "draws", "bias_rms_codes", "bias_mean_codes",
+                                      "meaning", NULL};
+  TRY(json_check_keys(obj, &here, known, err));
+  int draws;
+  TRY(get_int(obj, &here, "images", 1, 1 << 30, &r->jpeg_images, err));
+  TRY(get_int(obj, &here, "draws", 1, 1 << 20, &draws, err));
+  TRY(json_get_number(obj, &here, "bias_rms_codes", 1, 0.0, 255.0, &r->jpeg_bias_rms, NULL, err));
+  TRY(json_get_numbers(obj, &here, "bias_mean_codes", 1, 3, -255.0, 255.0, r->jpeg_bias_mean, NULL,
+                       err));
+  const char *meaning;
+  return json_get_string(obj, &here, "meaning", 1, &meaning, NULL, err);
+}
+
 static cf_status read_sample(const json_t *root, const json_at *at, cf_fit_result *r,
                              cf_error *err) {
   const json_t *obj;
@@ -871,7 +923,8 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
       "params",          "derived",         "scale",      "correlation", "held",
       "not_constrained", "at_bound",        "noise",      "loss",        "residuals",
       "solver",          "starts",          "best_start", "warnings",    "timing",
-      "choice",          "footprint",       "response",   "sample",      NULL};
+      "choice",          "footprint",       "response",   "sample",      "light_gains",
+      "jpeg_coding",     NULL};
   TRY(json_check_keys(root, &at, known, err));
   long long layout;
   TRY(json_get_integer(root, &at, "clayfit_fit", 1, 1, 1, &layout, NULL, err));
@@ -890,12 +943,14 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
   TRY(read_held(root, &at, r, err));
   TRY(read_noise_loss(root, &at, f, err));
   TRY(read_residuals(root, &at, r, err));
+  TRY(read_light_gains(root, &at, r, err));
   TRY(read_solver(root, &at, r, err));
   TRY(read_starts(root, &at, r, err));
   TRY(read_timing(root, &at, r, err));
   TRY(read_choice(root, &at, r->model, err));
   TRY(read_footprint(root, &at, f, err));
   TRY(read_sample(root, &at, r, err));
+  TRY(read_jpeg_coding(root, &at, r, err));
   return read_response(root, &at, r, err);
 }
 

@@ -157,6 +157,9 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
     p->log_exposures[k] = log(fit->exposures[k]);
   for (size_t i = 0; i < 3 * p->images && fit->white_balance; ++i)
     p->log_balance[i] = log(fit->white_balance[i]);
+  for (size_t l = 0; l < p->light_count && fit->light_gains && fit->light_count == p->light_count;
+       ++l)
+    p->log_light[l] = log(fit->light_gains[l]);
   p->loss = o->loss;
   p->loss_scale = o->loss_scale;
   fit_problem_clear_unknowns(p);
@@ -189,12 +192,30 @@ static cf_status sum_log_sigma(const fit_problem *p, double *sum, cf_error *err)
   return s;
 }
 
+/* The fit's gains per light (if any) into stats (allocated). */
+static cf_status copy_light_gains(const cf_fit_result *fit, cf_fit_result *stats, cf_error *err) {
+  size_t n = fit->light_count;
+  if (n == 0 || !fit->light_gains || !fit->light_gains_sd || !fit->light_names) return CF_OK;
+  stats->light_gains = malloc(n * sizeof *stats->light_gains);
+  stats->light_gains_sd = malloc(n * sizeof *stats->light_gains_sd);
+  stats->light_names = malloc(n * sizeof *stats->light_names);
+  if (!stats->light_gains || !stats->light_gains_sd || !stats->light_names)
+    return cf_error_set(err, CF_ENOMEM, "out of memory");
+  memcpy(stats->light_gains, fit->light_gains, n * sizeof *stats->light_gains);
+  memcpy(stats->light_gains_sd, fit->light_gains_sd, n * sizeof *stats->light_gains_sd);
+  memcpy(stats->light_names, fit->light_names, n * sizeof *stats->light_names);
+  stats->light_count = n;
+  return CF_OK;
+}
+
 cf_status fit_score_at(const cf_capture *capture, const fit_population *population,
                        const cf_fit_result *fit, double sigma, const cf_fit_options *o,
                        double *cost, double *log_sigma, cf_fit_result *stats, cf_error *err) {
   *stats = *fit;
   stats->exposures = stats->image_rmse = stats->image_relative_rmse = NULL;
   stats->exposure_sd = stats->white_balance = stats->white_balance_sd = NULL; /* (copied below) */
+  stats->light_gains = stats->light_gains_sd = NULL, stats->light_names = NULL;
+  stats->light_count = 0; /* (copied below) */
   stats->residuals = stats->censored = stats->rejected = 0;
   *cost = 0.0;
   fit_problem p;
@@ -230,6 +251,7 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
     else
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
+  if (s == CF_OK) s = copy_light_gains(fit, stats, err);
   fit_problem_release(&p);
   if (s != CF_OK) cf_fit_result_free(stats);
   return s;

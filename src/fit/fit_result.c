@@ -44,6 +44,12 @@ void cf_fit_result_free(cf_fit_result *result) {
   free(result->white_balance);
   free(result->white_balance_sd);
   result->exposure_sd = result->white_balance = result->white_balance_sd = NULL;
+  free(result->light_gains);
+  free(result->light_gains_sd);
+  free(result->light_names);
+  result->light_gains = result->light_gains_sd = NULL;
+  result->light_names = NULL;
+  result->light_count = 0;
   free(result->image_rmse);
   free(result->image_relative_rmse);
   result->exposures = result->image_rmse = result->image_relative_rmse = NULL;

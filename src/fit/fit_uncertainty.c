@@ -40,29 +40,42 @@ static int scaled_model_block(const fit_problem *p, const double *jtj, int *slot
 }
 
 /* The covariance of the unknowns not at a bound (those at one are held
- * there: their rows and columns are 0). */
+ * there: their rows and columns are 0), from their block of JᵀJ scaled to
+ * a unit diagonal (Jacobi), so that the rank test (cf_lsq_covariance:
+ * eigenvalues within 1e-12 of the largest) sees collinear columns, not
+ * columns of different scales: the response's prior is in its own units
+ * and the data in σ's, and a noise-free EXR capture's σ (5e-9) put 1e20
+ * between the two (a slope that only the prior holds looked singular, and
+ * the fit held the diffuse roughness as "not constrained"). */
 cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
                               int *rank_deficient, cf_error *err) {
   int n = p->num_unknowns, m = 0;
   int *map = malloc((size_t)n * sizeof *map);
   double *sub = malloc((size_t)n * (size_t)n * sizeof *sub);
   double *sub_covariance = malloc((size_t)n * (size_t)n * sizeof *sub_covariance);
+  double *unit = malloc((size_t)n * sizeof *unit);
   cf_status s =
-      map && sub && sub_covariance ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+      map && sub && sub_covariance && unit ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
   for (int u = 0; s == CF_OK && u < n; ++u)
     if (!p->at_bound[u]) map[m++] = u;
+  for (int a = 0; s == CF_OK && a < m; ++a) { /* (a column of 0 stays, and is singular) */
+    double d = jtj[map[a] * n + map[a]];
+    unit[a] = d > 0.0 && isfinite(d) ? 1.0 / sqrt(d) : 1.0;
+  }
   for (int a = 0; s == CF_OK && a < m; ++a)
-    for (int b = 0; b < m; ++b) sub[a * m + b] = jtj[map[a] * n + map[b]];
+    for (int b = 0; b < m; ++b) sub[a * m + b] = jtj[map[a] * n + map[b]] * unit[a] * unit[b];
   *rank_deficient = 0;
   if (s == CF_OK && m > 0) s = cf_lsq_covariance(m, sub, sub_covariance, rank_deficient, err);
   if (s == CF_OK) {
     memset(covariance, 0, (size_t)n * (size_t)n * sizeof *covariance);
     for (int a = 0; !*rank_deficient && a < m; ++a)
-      for (int b = 0; b < m; ++b) covariance[map[a] * n + map[b]] = sub_covariance[a * m + b];
+      for (int b = 0; b < m; ++b)
+        covariance[map[a] * n + map[b]] = sub_covariance[a * m + b] * unit[a] * unit[b];
   }
   free(map);
   free(sub);
   free(sub_covariance);
+  free(unit);
   return s;
 }
 
@@ -144,7 +157,8 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
   }
   int gains = 0;
   for (int u = 0; u < p->num_unknowns; ++u)
-    gains |= p->unknowns[u].kind == FIT_LOG_EXPOSURE || p->unknowns[u].kind == FIT_LOG_BALANCE;
+    gains |= p->unknowns[u].kind == FIT_LOG_EXPOSURE || p->unknowns[u].kind == FIT_LOG_BALANCE ||
+             p->unknowns[u].kind == FIT_LOG_LIGHT;
   if (!*found && gains && values[weakest] > 1e-10 * largest)
     /* the material is constrained: the deficiency is the gains' (holding
      * a model slot would not mend it; cf_fit_check_gains names the images
@@ -202,73 +216,16 @@ static cf_status number_tiles(const fit_problem *p, int tile_px, size_t *tile, s
   return CF_OK;
 }
 
-/* Each residual's part in the score, ψ = w ρ'(e²) e / σ with e the
- * residual in units of σ and w the sample's weight (as the normal
- * equations weigh it; a clipped channel's e and its slope from the
- * censored likelihood, fit_problem_censored_residual); 0 where censored
- * outright. Times ∂μ/∂x it is the residual's
- * part in the score's component x. */
-static void score_parts(const fit_problem *p, const double *prediction, const double *measured,
-                        double *psi) {
-  for (size_t i = 0; i < 3 * p->count; ++i) {
-    double e = (measured[i] - prediction[i]) * p->inv_sigma[i];
-    double w = p->sample_root ? p->sample_root[i / 3] * p->sample_root[i / 3] : 1.0;
-    double slope = 1.0;
-    if (p->flags[i / 3] >> (i % 3) & 1u) /* clipped: the censored likelihood's t */
-      e = -fit_problem_censored_residual(-e, &slope);
-    psi[i] = slope == 0.0 || !isfinite(e)
-                 ? 0.0
-                 : w * fit_problem_loss_weight(p, e * e) * e * slope * p->inv_sigma[i];
-  }
-}
-
-/* Each tile's score: g[t × m + u] = Σ_{i in tile t} ψ_i ∂μ_i/∂x_u for the
- * unknowns u not at a bound, by forward differences (backward at the upper
- * bound) of the prediction; the problem's values are left as they were. */
-static cf_status tile_scores(fit_problem *p, const size_t *tile, const double *psi,
-                             const double *base, double *g, cf_error *err) {
-  const int m = p->num_unknowns;
-  const size_t n = 3 * p->count;
-  double *x = malloc((size_t)m * sizeof *x), *moved = malloc((size_t)m * sizeof *moved);
-  double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
-  /* the values as they are (x → values → x is exact only to rounding) */
-  double params[CF_MAX_DIM], log_scale = p->log_scale, response[CF_RESPONSE_MODEL_KNOTS];
-  double *exposures = malloc((p->images ? p->images : 1) * sizeof *exposures);
-  double *balance = malloc(3 * (p->images ? p->images : 1) * sizeof *balance);
-  cf_status s = x && moved && prediction && measured && exposures && balance
-                    ? CF_OK
-                    : cf_error_set(err, CF_ENOMEM, "out of memory");
-  memcpy(params, p->params, sizeof params);
-  memcpy(response, p->response, sizeof response);
-  if (s == CF_OK) {
-    memcpy(exposures, p->log_exposures, p->images * sizeof *exposures);
-    memcpy(balance, p->log_balance, 3 * p->images * sizeof *balance);
-    fit_problem_get_x(p, x);
-  }
-  for (int u = 0; s == CF_OK && u < m; ++u) {
-    if (p->at_bound[u]) continue;
-    double h = 1e-6 * fmax(1.0, fabs(x[u]));
-    if (x[u] + h > p->upper[u]) h = -h;
-    memcpy(moved, x, (size_t)m * sizeof *x);
-    moved[u] += h;
-    fit_problem_set_x(p, moved);
-    s = fit_problem_predict(p, prediction, measured, err);
-    for (size_t i = 0; s == CF_OK && i < n; ++i)
-      g[tile[i / 3] * (size_t)m + (size_t)u] += psi[i] * (prediction[i] - base[i]) / h;
-  }
-  if (x && moved && prediction && measured && exposures && balance) { /* set_x may have run */
-    memcpy(p->params, params, sizeof params);
-    p->log_scale = log_scale;
-    memcpy(p->response, response, sizeof response);
-    memcpy(p->log_exposures, exposures, p->images * sizeof *exposures);
-    memcpy(p->log_balance, balance, 3 * p->images * sizeof *balance);
-  }
-  free(exposures);
-  free(balance);
-  free(x);
-  free(moved);
-  free(prediction);
-  free(measured);
+/* Each tile's score: g[t × m + u] = Σ_{i in tile t} ψ_i ∂μ_i/∂x_u
+ * (fit_problem_group_scores, from the analytic Jacobian), 0 for the
+ * unknowns at a bound (held there). */
+static cf_status tile_scores(const fit_problem *p, const size_t *tile, double *g, size_t tiles,
+                             cf_error *err) {
+  const size_t m = (size_t)p->num_unknowns;
+  cf_status s = fit_problem_group_scores(p, tile, g, err);
+  for (size_t t = 0; s == CF_OK && t < tiles; ++t)
+    for (size_t u = 0; u < m; ++u)
+      if (p->at_bound[u]) g[t * m + u] = 0.0;
   return s;
 }
 
@@ -288,31 +245,23 @@ static cf_status tile_sandwich(int m, const double *g, size_t tiles, double *cov
   return done ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
 }
 
-cf_status fit_tile_covariance(fit_problem *p, int tile_px, double *covariance, int *applied,
+cf_status fit_tile_covariance(const fit_problem *p, int tile_px, double *covariance, int *applied,
                               cf_error *err) {
   const size_t n = p->count, m = (size_t)p->num_unknowns;
   *applied = 0;
   if (n == 0 || m == 0) return CF_OK;
   size_t *tile = malloc(n * sizeof *tile), tiles = 0;
-  double *base = malloc(3 * n * sizeof *base), *measured = malloc(3 * n * sizeof *measured);
-  double *psi = malloc(3 * n * sizeof *psi), *g = NULL;
-  cf_status s = tile && base && measured && psi ? number_tiles(p, tile_px, tile, &tiles, err)
-                                                : cf_error_set(err, CF_ENOMEM, "out of memory");
+  double *g = NULL;
+  cf_status s = tile ? number_tiles(p, tile_px, tile, &tiles, err)
+                     : cf_error_set(err, CF_ENOMEM, "out of memory");
   /* B from fewer tiles than a few per unknown is singular or nearly */
   const int enough = tiles >= FIT_TILES_PER_UNKNOWN * m;
   if (s == CF_OK && enough && !(g = calloc(tiles * m, sizeof *g)))
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK && enough) s = fit_problem_predict(p, base, measured, err);
-  if (s == CF_OK && enough) {
-    score_parts(p, base, measured, psi);
-    s = tile_scores(p, tile, psi, base, g, err);
-  }
+  if (s == CF_OK && enough) s = tile_scores(p, tile, g, tiles, err);
   if (s == CF_OK && enough) s = tile_sandwich((int)m, g, tiles, covariance, err);
   *applied = s == CF_OK && enough;
   free(tile);
-  free(base);
-  free(measured);
-  free(psi);
   free(g);
   return s;
 }

@@ -39,12 +39,12 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
  * squares of pixels (a JPEG's blocks): the cluster-robust sandwich
  * A⁻¹ B A⁻¹ with B = Σ_tiles g_t g_tᵀ, g_t the tile's part in the score
  * (its residuals in units of σ, weighed as the normal equations weigh
- * them, times ∂μ/∂x by forward differences). Independent residuals of
- * variance σ² give B ≈ A. `covariance` holds A⁻¹ (fit_free_covariance)
- * on entry and the sandwich on return (*applied 1), or is left as it was
- * when the observations fall in fewer than FIT_TILES_PER_UNKNOWN tiles per
- * unknown (*applied 0); the problem's values are kept. */
-cf_status fit_tile_covariance(fit_problem *p, int tile_px, double *covariance, int *applied,
+ * them, times ∂μ/∂x from the analytic Jacobian, fit_problem_group_scores).
+ * Independent residuals of variance σ² give B ≈ A. `covariance` holds A⁻¹
+ * (fit_free_covariance) on entry and the sandwich on return (*applied 1),
+ * or is left as it was when the observations fall in fewer than
+ * FIT_TILES_PER_UNKNOWN tiles per unknown (*applied 0). */
+cf_status fit_tile_covariance(const fit_problem *p, int tile_px, double *covariance, int *applied,
                               cf_error *err);
 #define FIT_TILES_PER_UNKNOWN 4
 

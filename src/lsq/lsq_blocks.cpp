@@ -58,7 +58,20 @@ class BlockCost final : public ceres::CostFunction {
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     Eigen::Map<const RowMajor> jtj(jtj_storage.data(), k, k);
     Eigen::Map<const Eigen::VectorXd> jtu(jtu_storage.data(), k);
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(jtj);
+    // JᵀJ = S⁻¹ M S⁻¹ with M of unit diagonal (S = diag(JᵀJ)^(−1/2); 1 for
+    // a column of 0), and M's eigenvalues cut: a direction is dropped for
+    // what the block sees of it, not for its scale (block 0 holds the
+    // response's prior, in its own units, beside data in σ's: at σ 5e-9,
+    // a noise-free EXR capture's, the prior fell below 1e-14 of the data
+    // and its slope drifted)
+    Eigen::VectorXd unit(k);
+    for (int c = 0; c < k; ++c) {
+      const double d = jtj(c, c);
+      unit(c) = d > 0.0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 1.0;
+    }
+    const Eigen::MatrixXd scaled = unit.asDiagonal() * jtj * unit.asDiagonal();
+    const Eigen::VectorXd scaled_jtu = unit.cwiseProduct(jtu);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
     if (eigen.info() != Eigen::Success) return false;
     const double largest = std::max(0.0, eigen.eigenvalues().maxCoeff());
     double projected = 0.0;
@@ -68,10 +81,11 @@ class BlockCost final : public ceres::CostFunction {
       residuals[i] = 0.0;
       if (!(lambda > 1e-14 * largest)) continue;  // a direction the block does not see
       const double root = std::sqrt(lambda);
-      residuals[i] = eigen.eigenvectors().col(i).dot(jtu) / root;
+      residuals[i] = eigen.eigenvectors().col(i).dot(scaled_jtu) / root;
       projected += residuals[i] * residuals[i];
       for (int c = 0; c < k; ++c)
-        jacobian[static_cast<size_t>(i) * n + columns_[c]] = root * eigen.eigenvectors()(c, i);
+        jacobian[static_cast<size_t>(i) * n + columns_[c]] =
+            root * eigen.eigenvectors()(c, i) / unit(c);
     }
     residuals[k] = std::sqrt(std::max(0.0, 2.0 * cost - projected));
     return true;

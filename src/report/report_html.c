@@ -159,6 +159,24 @@ static void gains_table(FILE *f, const report_data *d) {
   fputs("</tr></table>\n", f);
 }
 
+/* The fitted gains per light g_l ± sd (--fit-gains per-light where a
+ * photo has several lights); nothing otherwise. */
+static void light_gains_table(FILE *f, const report_data *d) {
+  const cf_fit_result *r = &d->fit->result;
+  if (r->light_count == 0 || !r->light_gains || !r->light_gains_sd || !r->light_names) return;
+  fputs(
+      "<h2>Per-light gains</h2>\n<p>Each light's gain g<sub>l</sub> inside every photo's sum "
+      "over its lights (<code>--fit-gains per-light</code>; their mean log is 0) &plusmn; its "
+      "standard deviation.</p>\n<table>",
+      f);
+  for (size_t l = 0; l < r->light_count; ++l) {
+    fputs("<tr><td class=\"l\">", f);
+    html(f, r->light_names[l]);
+    fprintf(f, "</td><td>%.4f &plusmn; %.4f</td></tr>\n", r->light_gains[l], r->light_gains_sd[l]);
+  }
+  fputs("</table>\n", f);
+}
+
 static void choice_table(FILE *f, const report_data *d) {
   const json_t *choice = d->doc ? json_object_get(d->doc, "choice") : NULL;
   const json_t *list = json_object_get(choice, "candidates");
@@ -332,6 +350,7 @@ cf_status report_write_html(const report_data *d, const char *dir, const char *f
   parameter_table(f, d);
   residual_summary(f, d);
   gains_table(f, d);
+  light_gains_table(f, d);
   choice_table(f, d);
   plots_and_speed(f, d);
   image_rows(f, d, image_files);

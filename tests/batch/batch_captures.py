@@ -1,9 +1,34 @@
-"""The batch tests' six small synthetic captures, one broken on purpose (its
-first image deleted), and their manifest: shared by check_batch.py (the
-local executor) and check_batch_slurm.py (Slurm), which compare against
-each other's results."""
+"""What check_batch.py (the local executor) and check_batch_slurm.py (Slurm)
+share, since they compare against each other's results: the six small
+synthetic captures, one broken on purpose (its first image deleted), and
+their manifest; the checks' tally (check, finish) and the clayfit runner."""
 import json
 import os
+import subprocess
+import sys
+
+failures = 0
+
+
+def check(ok, what):
+    """Print the check's outcome and count it if it failed (finish says)."""
+    global failures
+    print(("ok   " if ok else "FAIL ") + what)
+    failures += not ok
+
+
+def finish():
+    """Exit 1 if a check failed, else 0, saying which."""
+    print("FAILED" if failures else "all ok")
+    sys.exit(1 if failures else 0)
+
+
+def clayfit_runner(clayfit):
+    """run(*args, **kw): clayfit with args, its output captured as text."""
+    def run(*args, **kw):
+        return subprocess.run([clayfit, *args], capture_output=True, text=True, **kw)
+    return run
+
 
 SYNTH = ["--images", "4", "--size", "96x72", "--format", "exr", "--no-noise",
          "--supersample", "1"]

@@ -25,21 +25,11 @@ import time
 
 import jsonschema
 
-from batch_captures import CAPTURES, SYNTH, make_captures
+from batch_captures import CAPTURES, SYNTH, check, clayfit_runner, finish, make_captures
 
 CLAYFIT, SCHEMA, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 THREADS = "1"
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
-
-def run(*args, **kw):
-    return subprocess.run([CLAYFIT, *args], capture_output=True, text=True, **kw)
+run = clayfit_runner(CLAYFIT)
 
 
 def synth(name, extra=()):
@@ -227,5 +217,4 @@ r = batch()
 check(r.returncode == 1 and "failed: broken:" in r.stderr
       and all(entry_stamp(n) for n in CAPTURES), "Ctrl-C: the next run completes the library")
 
-print("FAILED" if failures else "all ok")
-sys.exit(1 if failures else 0)
+finish()

@@ -28,7 +28,7 @@ import time
 
 import jsonschema
 
-from batch_captures import CAPTURES, make_captures
+from batch_captures import CAPTURES, check, clayfit_runner, finish, make_captures
 
 CLAYFIT, SCHEMA, WORK = sys.argv[1], sys.argv[2], os.path.abspath(sys.argv[3])
 if not shutil.which("sbatch"):
@@ -38,17 +38,7 @@ if not os.path.exists(os.environ.get("SLURM_CONF", "")):
     print("FAIL: SLURM_CONF names no cluster (the slurm_start test sets it up)")
     sys.exit(1)
 THREADS = "1"
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
-
-def run(*args, **kw):
-    return subprocess.run([CLAYFIT, *args], capture_output=True, text=True, **kw)
+run = clayfit_runner(CLAYFIT)
 
 
 def synth(name, *extra):
@@ -239,5 +229,4 @@ r = run("batch", MANIFEST, "-o", LIBRARY, "--executor", "slurm", "--force",
         env={**os.environ, "PATH": "/nonexistent"})
 check(r.returncode == 1 and "cannot run sbatch" in r.stderr, f"no sbatch: exit 1 ({r.stderr.strip()})")
 
-print("FAILED" if failures else "all ok")
-sys.exit(1 if failures else 0)
+finish()

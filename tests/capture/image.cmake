@@ -6,3 +6,6 @@ clayfit_c_test(test_image_io SOURCES capture/test_image_io.c LIBS clayfit_image 
 clayfit_c_test(test_colour SOURCES capture/test_colour.c LIBS clayfit_image LABELS capture)
 clayfit_c_test(test_envmap SOURCES capture/test_envmap.c LIBS clayfit_image LABELS capture
                ARGS ${CLAYFIT_SHARED_DATA})
+# a JPEG's coding from its markers, the in-memory round trip, damaged headers
+clayfit_c_test(test_jpeg_coding SOURCES capture/test_jpeg_coding.c LIBS clayfit_image
+               LABELS capture)

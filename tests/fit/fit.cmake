@@ -144,6 +144,8 @@ clayfit_c_test(test_fit_jpeg SOURCES fit/test_fit_jpeg.c LIBS clayfit_fit_test_s
                LABELS "fit;capture")
 add_test(NAME test_fit_jpeg_sweep COMMAND test_fit_jpeg sweep)
 set_tests_properties(test_fit_jpeg_sweep PROPERTIES LABELS "fit;capture;slow")
+add_test(NAME test_fit_jpeg_sweep_large COMMAND test_fit_jpeg sweep-large)
+set_tests_properties(test_fit_jpeg_sweep_large PROPERTIES LABELS "fit;capture;slow")
 # clipped channels under the censored likelihood at the clip level: the
 # 2-sd coverage of 20 noisy 8-bit PNG captures declaring clip level 0.93
 clayfit_c_test(test_fit_censoring SOURCES fit/test_fit_censoring.c
@@ -177,10 +179,17 @@ clayfit_c_test(test_lsq_extrapolate SOURCES fit/test_lsq_extrapolate.c LIBS clay
 target_include_directories(test_lsq_extrapolate PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 # The fit's problem (private to src/fit): any number of unknowns, a block's
 # evaluation the same on many threads at once, its cost that of the
-# predictions, the slot lookup (cf_model_slot_param).
+# predictions, its gradient (gains per light inside the sums too), the slot
+# lookup (cf_model_slot_param).
 clayfit_c_test(test_fit_problem SOURCES fit/test_fit_problem.c LIBS clayfit_fit_test_support
                LABELS fit)
 target_include_directories(test_fit_problem PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
+# The fit's uncertainty: the JPEG tiles' sandwich from the analytic Jacobian
+# against central differences of the prediction (loss, weights, clipping);
+# the covariance's rank test blind to the columns' scales.
+clayfit_c_test(test_fit_uncertainty SOURCES fit/test_fit_uncertainty.c
+               LIBS clayfit_fit_test_support LABELS fit)
+target_include_directories(test_fit_uncertainty PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 # The fitted camera response curve: monotone, its special cases, its
 # derivatives and inverse (docs/model.md §5.4).
 clayfit_c_test(test_response_model SOURCES fit/test_response_model.c
@@ -222,8 +231,10 @@ endforeach()
 # ... and a gain per light (--fit-gains per-light) on small orthographic
 # captures: per image when each photo has its own light, shared by the
 # photos of one light otherwise; and a white balance per image
-# (--fit-gains per-image-rgb) under lights of different colours; per-light
-# refused where photos have several lights or one light lights them all.
+# (--fit-gains per-image-rgb) under lights of different colours; per light
+# inside the sums where photos have two lights each (declared +15 % and
+# -10 % off: the gains and the material recovered), refused where two
+# lights share a direction in every photo or one light lights them all.
 foreach(mode refused per-light several-lights white-balance)
   add_test(NAME cli_fit_gains_${mode} COMMAND ${CLAYFIT_PYTHON} ${CHECK_GAINS} ${mode} ${CLAYFIT}
            ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains_${mode})

@@ -9,6 +9,12 @@
  *     prior);
  *   - its gradient Jᵀu is the cost's by central differences, with every
  *     unknown free, the response curve's slopes too;
+ *   - with two lights in every image (a directional light added to the
+ *     flash), each slot gets its light (cf_capture_light_ids, named by
+ *     cf_capture_light_name), and with a gain per light inside the sums
+ *     (fit_problem_free_light_gains) the same three checks hold: threads,
+ *     cost against the predictions, gradient against central differences
+ *     (with a response curve: the chain rule through it);
  *   - cf_model_slot_param agrees with the model table;
  *   - with a response curve, the noise model's σ is the sensor's carried
  *     through the curve, R'(x) √(read² + shot x) at x = R⁻¹(y) (it was
@@ -238,6 +244,45 @@ static void test_evaluate(const cf_capture *capture) {
   fit_problem_release(&p);
 }
 
+/* A gain per light inside the sums: a capture whose images each have a
+ * directional light (slot 0) and the flash (slot 1). */
+static void test_light_gains(const cf_capture *capture) {
+  fit_problem p;
+  cf_error err = {0};
+  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
+    CHECK(0, "init: %s", err.message);
+    return;
+  }
+  char name[2][96];
+  cf_capture_light_name(capture, 3, 0, name[0], sizeof name[0]);
+  cf_capture_light_name(capture, 3, 1, name[1], sizeof name[1]);
+  CHECK(p.lights == 2 && p.light_count == 2 && p.several_lights && p.image_lights == 2 &&
+            p.slot_light[6] == 0 && p.slot_light[7] == 1 && !strcmp(name[0], "light 1") &&
+            !strcmp(name[1], "light 2"),
+        "two lights in every image: %d slots, %zu lights (%s, %s)", p.lights, p.light_count,
+        name[0], name[1]);
+  fit_problem_set_sigma(&p, capture, 1.0);
+  p.loss = CF_LOSS_NONE;
+  p.block_size = 256;
+  const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.8, 0.7, 0.9, 1.1, 1.3, 1.2};
+  for (int curve = 0; curve < 2; ++curve) {
+    if (curve) memcpy(p.response, slopes, sizeof slopes);
+    fit_problem_clear_unknowns(&p);
+    for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
+    fit_problem_free_light_gains(&p);
+    if (curve) fit_problem_free_response(&p);
+    CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+    double x[64];
+    fit_problem_get_x(&p, x);
+    for (int u = 0; u < p.num_unknowns; ++u) x[u] += 0.01 * (u % 5 - 2);
+    x[p.num_unknowns - (curve ? 1 + CF_RESPONSE_MODEL_KNOTS : 1)] = 0.2; /* log g of light 1 */
+    test_threads(&p, x);
+    test_cost_is_prediction(&p, x, curve ? "light gains, a response curve" : "light gains");
+    test_gradient(&p, x);
+  }
+  fit_problem_release(&p);
+}
+
 /* The noise model's σ at the measurements through the curve R(x) = √x
  * (every slope 1/2): R'(x) √(read² + shot x), x = y², R'(x) = 1/(2y). */
 static void test_noise_through_curve(const cf_capture *capture) {
@@ -284,6 +329,15 @@ int main(void) {
   if (capture) {
     test_many_unknowns(capture);
     test_evaluate(capture);
+    cf_capture_free(capture);
+  }
+  char folder[512]; /* the same photos, a directional light added to the flash */
+  if (fit_test_render(dir, "two_lights", &o, folder, sizeof folder) &&
+      fit_test_edit_text(folder, "capture.json", "\"lights\": [",
+                         "\"lights\": [{\"type\": \"directional\", \"direction\": [0.3, -0.5, "
+                         "1], \"irradiance\": [1, 1, 1]}, ") &&
+      (capture = fit_test_load(folder))) {
+    test_light_gains(capture);
     cf_capture_free(capture);
   }
   o.read_noise = 0.002;

@@ -21,7 +21,7 @@ COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/col
           src/capture/colmap_text.c src/capture/colmap_read.c
 COLMAP_WRITE := src/capture/colmap_write.c
 IMAGE := src/capture/image_io.cpp src/capture/image_exr_check.c src/capture/image_check.c \
-         src/capture/colour.c src/capture/envmap.c
+         src/capture/colour.c src/capture/envmap.c src/capture/jpeg_coding.c
 CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
 FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c
 

@@ -18,6 +18,10 @@
  * not instrumented: crashes in them are found, but their coverage does not
  * guide the fuzzing.
  *
+ * Every input is also parsed as a JPEG's markers (cf_jpeg_coding_parse, the
+ * quality and chroma the fit's model of JPEG coding reads): a failure names
+ * the input, a success gives a quality of 1 to 100.
+ *
  * Besides crashes and sanitizer reports, a broken promise aborts: a failure
  * leaves the image empty and names the file; a success gives 1 to 4
  * channels of a positive size. */
@@ -67,8 +71,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   char name[16], path[4096];
   std::snprintf(name, sizeof name, "image.%s", kExtensions[data[0] % 6]);
   fuzz_write(name, data + 1, size - 1, path);
-  cf_image_header header;
   cf_error err = {};
+  cf_jpeg_coding coding;
+  if (cf_jpeg_coding_parse(data + 1, size - 1, "input", &coding, &err) == CF_OK)
+    fuzz_require(coding.quality >= 1 && coding.quality <= 100, "a quality of 1 to 100", "");
+  else
+    fuzz_require(std::strstr(err.message, "input") != nullptr, "a failure names the input",
+                 err.message);
+  err = {};
+  cf_image_header header;
   cf_status s = cf_image_read_header(path, &header, &err);
   if (s != CF_OK) {
     fuzz_require(err.status == s && std::strstr(err.message, path),

@@ -9,6 +9,8 @@
  *   - the covariance (JᵀJ)⁻¹ of a known matrix, and a singular one flagged;
  *   - the Newton decrement ½ gᵀ H⁺ g with and without pinned parameters,
  *     and a direction no data see dropped;
+ *   - a block whose directions differ in scale by 1e19 (a fit's data at a
+ *     tiny σ beside the response's prior in one block) solved in both;
  *   - Eigen's eigen-decomposition and Cholesky behind linalg.h, and the
  *     Schur complement the gains' check uses (cf_schur_covariance). */
 #include <math.h>
@@ -119,6 +121,40 @@ static void test_solve(void) {
   s = solve(&q, x, &options, &summary, &err);
   CHECK(s == CF_OK && summary.ending == CF_LSQ_END_STOPPED && summary.stopped,
         "stopped: status %d, ending %d", s, summary.ending);
+}
+
+/* C(x) = ½ (x − m)ᵀ A (x − m), A = [[1e20, 1e9], [1e9, 16]]: well
+ * conditioned at a unit diagonal (correlation 0.025), but its small
+ * eigenvalue is 1.6e-19 of the large one. Compressed on the eigenvalues
+ * of A itself (cut at 1e-14 of the largest), x₁'s direction was dropped
+ * and x₁ stayed where it started (noise-free fits with a response
+ * curve: its prior in block 0 beside data at σ 5e-9). */
+static int scaled_evaluate(void *user, const double *x, size_t block, double *cost, double *jtj,
+                           double *jtu) {
+  static const double a[4] = {1e20, 1e9, 1e9, 16.0}, m[2] = {3.0, -2.0};
+  (void)user, (void)block;
+  double d[2] = {x[0] - m[0], x[1] - m[1]};
+  double ad[2] = {a[0] * d[0] + a[1] * d[1], a[2] * d[0] + a[3] * d[1]};
+  *cost = 0.5 * (d[0] * ad[0] + d[1] * ad[1]);
+  if (jtj) {
+    memcpy(jtj, a, sizeof a);
+    jtu[0] = ad[0], jtu[1] = ad[1];
+  }
+  return CF_LSQ_EVALUATED;
+}
+
+static void test_scales(void) {
+  static const double lower[2] = {-100.0, -100.0}, upper[2] = {100.0, 100.0};
+  double x[2] = {0.0, 0.0};
+  cf_lsq_problem problem = {2, x, lower, upper, 1, scaled_evaluate, quad_columns, NULL, NULL};
+  cf_lsq_options options;
+  cf_lsq_default_options(&options);
+  options.threads = 1;
+  cf_lsq_summary summary;
+  cf_error err = {0};
+  CHECK(cf_lsq_solve(&problem, &options, &summary, &err) == CF_OK, "solve: %s", err.message);
+  CHECK(fabs(x[0] - 3.0) < 1e-8 && fabs(x[1] + 2.0) < 1e-6,
+        "scales 1e19 apart: minimum (3, -2), found (%.12g, %.12g)", x[0], x[1]);
 }
 
 /* Every step rejected (not finite anywhere but at the start): the trust
@@ -251,6 +287,7 @@ int main(void) {
   test_schur();
   test_solve();
   test_collapsed_radius();
+  test_scales();
   test_covariance();
   test_decrement();
   test_linalg();
