@@ -25,7 +25,10 @@ tone_curve "unknown". Checked, per declaration:
     cost to the material, which no declaration can give a reference for,
     is printed against the truth, not asserted).
 A table of every fit is printed (docs/fitting.md). With --jpg the JPEG fits
-are printed and not asserted (JPEG's correlated noise: h5's noise model).
+are asserted the same way (the codec's error modelled, docs/model.md 6.2),
+but for one open case, printed only: linear photos declared srgb or gamma,
+where the fit finds a second minimum (the curve's top slope at its bound,
+the level 0.61; docs/fitting.md "Response curve").
 
 The true curves are restated here as the oracle (src/capture/colour.c is
 the definition; test_response_model checks the model against sRGB's)."""
@@ -190,11 +193,16 @@ def without_noise_block(clayfit, folder):
     return failures
 
 
+def open_case(true, fmt, declared):
+    """The JPEG case not yet solved (printed, not asserted)."""
+    return fmt == "jpg" and true == "linear" and declared in ("srgb", "gamma")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("clayfit")
     ap.add_argument("workdir")
-    ap.add_argument("--jpg", action="store_true", help="also JPEG captures (printed only)")
+    ap.add_argument("--jpg", action="store_true", help="also JPEG captures")
     ap.add_argument("--auto", action="store_true",
                     help="let clayfit choose the model (docs/fitting.md's table) instead of M2")
     args = ap.parse_args()
@@ -236,7 +244,7 @@ def main():
                     ", ".join("%.4f" % s for s in p["albedo"]["sd"]),
                     p.get("roughness", {"value": math.nan})["value"],
                     p.get("diffuse_roughness", {"value": math.nan})["value"]), flush=True)
-                if decode is None or fmt != "png8" or name == "(true)?":
+                if decode is None or name == "(true)?" or open_case(true, fmt, name):
                     continue
                 what = "%s %s declared %s" % (true, fmt, name)
                 slopes = doc["response"]["slopes"][:3]
