@@ -70,6 +70,7 @@ static void test_roundtrip(const char *dir, const cf_image *image) {
          differ, n, 255.0 * worst);
   CHECK(s == CF_OK && differ == 0, "%zu values differ from the file's", differ);
   CHECK(worst > 0.5 / 255.0, "the round trip changed nothing: not a JPEG coding");
+  cf_image_free(&memory);
   cf_image bad = *image;
   bad.channels = 1;
   CHECK(cf_image_jpeg_roundtrip(&bad, 85, CF_CHROMA_420, &memory, &err) == CF_EINVAL,
