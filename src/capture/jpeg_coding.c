@@ -109,15 +109,18 @@ static cf_status chroma_of(const jpeg_header *h, const char *what, cf_jpeg_codin
   for (int c = 1; c < 3; ++c)
     if (h->h[c] != 1 || h->v[c] != 1)
       return bad(err, what, 0, "chroma sampling other than 4:4:4, 4:2:2 or 4:2:0");
-  if (h->h[0] == 2 && h->v[0] == 2) coding->chroma = CF_CHROMA_420;
-  else if (h->h[0] == 2 && h->v[0] == 1) coding->chroma = CF_CHROMA_422;
-  else return bad(err, what, 0, "chroma sampling other than 4:4:4, 4:2:2 or 4:2:0");
+  if (h->h[0] == 2 && h->v[0] == 2)
+    coding->chroma = CF_CHROMA_420;
+  else if (h->h[0] == 2 && h->v[0] == 1)
+    coding->chroma = CF_CHROMA_422;
+  else
+    return bad(err, what, 0, "chroma sampling other than 4:4:4, 4:2:2 or 4:2:0");
   return CF_OK;
 }
 
 /* The markers from SOI to the first SOS (T.81 §B.1.1.2–B.1.1.4). */
-static cf_status walk_markers(const unsigned char *b, size_t size, const char *what,
-                              jpeg_header *h, cf_error *err) {
+static cf_status walk_markers(const unsigned char *b, size_t size, const char *what, jpeg_header *h,
+                              cf_error *err) {
   if (size < 4 || b[0] != 0xFF || b[1] != 0xD8) return bad(err, what, 0, "no SOI marker");
   size_t i = 2;
   for (;;) {
@@ -135,7 +138,8 @@ static cf_status walk_markers(const unsigned char *b, size_t size, const char *w
     cf_status s = CF_OK;
     if (marker == 0xDA) return CF_OK; /* SOS: the header is over */
     if (marker == 0xDB) s = read_dqt(body, n, i + 2, what, h, err);
-    if (marker == 0xC0 || marker == 0xC1 || marker == 0xC2) s = read_sof(body, n, i + 2, what, h, err);
+    if (marker == 0xC0 || marker == 0xC1 || marker == 0xC2)
+      s = read_sof(body, n, i + 2, what, h, err);
     if (marker == 0xC3 || (marker >= 0xC5 && marker <= 0xCF && marker != 0xC8 && marker != 0xCC))
       return bad(err, what, i, "a lossless, hierarchical or arithmetic-coded frame");
     if (s != CF_OK) return s;
@@ -162,9 +166,9 @@ cf_status cf_jpeg_coding_read(const char *path, cf_jpeg_coding *coding, cf_error
   size_t size = bytes ? fread(bytes, 1, JPEG_HEADER_MOST, file) : 0;
   int failed = ferror(file);
   fclose(file);
-  cf_status s = !bytes    ? cf_error_set(err, CF_ENOMEM, "%s: out of memory", path)
-                : failed  ? cf_error_set(err, CF_EIO, "%s: could not read it", path)
-                          : cf_jpeg_coding_parse(bytes, size, path, coding, err);
+  cf_status s = !bytes   ? cf_error_set(err, CF_ENOMEM, "%s: out of memory", path)
+                : failed ? cf_error_set(err, CF_EIO, "%s: could not read it", path)
+                         : cf_jpeg_coding_parse(bytes, size, path, coding, err);
   free(bytes);
   return s;
 }

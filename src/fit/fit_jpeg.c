@@ -66,7 +66,6 @@ static size_t pixel_of(const cf_observations *obs, size_t i, int width, int heig
   return (size_t)y * (size_t)width + (size_t)x;
 }
 
-
 /* What one image's coding needs: the photo as stored, the prediction and
  * σ of each observed channel, and the codec's mean change of the
  * prediction there (in the measurements' units). With a fitted response
@@ -99,8 +98,10 @@ static void code_tables(image_coding *c) {
     for (int e = 0; e < 2 && k + e < 256; ++e) {
       const float px[3] = {at[e], at[e], at[e]};
       cf_decode_pixel(&unclipped, px, 3, value);
-      if (e == 0) c->code_value[k] = value[0];
-      else if (k < 255) c->code_edge[k] = value[0];
+      if (e == 0)
+        c->code_value[k] = value[0];
+      else if (k < 255)
+        c->code_edge[k] = value[0];
     }
   }
 }
@@ -110,8 +111,10 @@ static int code_of(const image_coding *c, double value) {
   int lo = 0, hi = 255; /* the first edge above the value */
   while (lo < hi) {
     int mid = (lo + hi) / 2;
-    if (c->code_edge[mid] > value) hi = mid;
-    else lo = mid + 1;
+    if (c->code_edge[mid] > value)
+      hi = mid;
+    else
+      lo = mid + 1;
   }
   return lo;
 }
@@ -222,8 +225,10 @@ static cf_status code_draws(const cf_capture_image *image, size_t k, size_t n, i
   cf_rng rng = cf_rng_seed(0x6a70656700000000ull + k); /* the same draws every run */
   cf_rng pair = rng;
   for (int d = 0; s == CF_OK && d < FIT_JPEG_DRAWS; ++d) {
-    if (d % 2 == 0) pair = rng; /* the pair's second draw repeats the first's, negated */
-    else rng = pair;
+    if (d % 2 == 0)
+      pair = rng; /* the pair's second draw repeats the first's, negated */
+    else
+      rng = pair;
     draw_photo(n, &rng, d % 2 ? -1.0 : 1.0, c);
     s = cf_image_jpeg_roundtrip(&c->noisy, image->jpeg_quality, (cf_chroma)image->jpeg_chroma,
                                 &coded, err);
@@ -336,7 +341,8 @@ cf_status fit_jpeg_correct(fit_problem *p, const cf_capture *capture, const cf_f
                            cf_fit_result *r, cf_error *err) {
   const cf_observations *obs = cf_capture_observations(capture);
   size_t images = cf_capture_image_count(capture), n = obs->count ? obs->count : 1;
-  coding_work w = {p, capture, o, NULL, 1, malloc(3 * n * sizeof *w.y), malloc(n), NULL, NULL, NULL};
+  coding_work w = {p,         capture, o,    NULL, 1, malloc(3 * n * sizeof *w.y),
+                   malloc(n), NULL,    NULL, NULL};
   size_t *image = malloc((images ? images : 1) * sizeof *image);
   w.tally = calloc(images ? images : 1, sizeof *w.tally);
   w.status = calloc(images ? images : 1, sizeof *w.status);
@@ -346,8 +352,10 @@ cf_status fit_jpeg_correct(fit_problem *p, const cf_capture *capture, const cf_f
   if (!w.y || !w.flags || !image || !w.tally || !w.status || !w.err)
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
   int count = 0;
-  for (size_t k = 0; s == CF_OK && k < images; ++k)
-    if (cf_capture_image_at(capture, k)->jpeg_quality > 0) image[count++] = k;
+  for (size_t k = 0; s == CF_OK && k < images; ++k) { /* (an image may have no observation) */
+    const cf_capture_image *at = cf_capture_image_at(capture, k);
+    if (at->jpeg_quality > 0 && at->observations > 0) image[count++] = (size_t)k;
+  }
   if (s == CF_OK) {
     memcpy(w.y, obs->rgb, 3 * obs->count * sizeof *w.y);
     memcpy(w.flags, obs->flags, obs->count);

@@ -754,8 +754,8 @@ static cf_status read_jpeg_coding(const json_t *root, const json_at *at, cf_fit_
   TRY(json_get_object(root, at, "jpeg_coding", 0, &obj, &found, err));
   if (!found) return CF_OK;
   json_at here = json_member_at(at, "jpeg_coding");
-  static const char *const known[] = {"images", "draws", "bias_rms_codes", "bias_mean_codes",
-                                      "meaning", NULL};
+  static const char *const known[] = {"images",          "draws",   "bias_rms_codes",
+                                      "bias_mean_codes", "meaning", NULL};
   TRY(json_check_keys(obj, &here, known, err));
   int draws;
   TRY(get_int(obj, &here, "images", 1, 1 << 30, &r->jpeg_images, err));
@@ -918,13 +918,33 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
 
 static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f, cf_error *err) {
   json_at at = {path, NULL, NULL, 0};
-  static const char *const known[] = {
-      "clayfit_fit",     "clayfit_version", "created",    "capture",     "model",
-      "params",          "derived",         "scale",      "correlation", "held",
-      "not_constrained", "at_bound",        "noise",      "loss",        "residuals",
-      "solver",          "starts",          "best_start", "warnings",    "timing",
-      "choice",          "footprint",       "response",   "sample",      "light_gains",
-      "jpeg_coding",     NULL};
+  static const char *const known[] = {"clayfit_fit",
+                                      "clayfit_version",
+                                      "created",
+                                      "capture",
+                                      "model",
+                                      "params",
+                                      "derived",
+                                      "scale",
+                                      "correlation",
+                                      "held",
+                                      "not_constrained",
+                                      "at_bound",
+                                      "noise",
+                                      "loss",
+                                      "residuals",
+                                      "solver",
+                                      "starts",
+                                      "best_start",
+                                      "warnings",
+                                      "timing",
+                                      "choice",
+                                      "footprint",
+                                      "response",
+                                      "sample",
+                                      "light_gains",
+                                      "jpeg_coding",
+                                      NULL};
   TRY(json_check_keys(root, &at, known, err));
   long long layout;
   TRY(json_get_integer(root, &at, "clayfit_fit", 1, 1, 1, &layout, NULL, err));

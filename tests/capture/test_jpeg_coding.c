@@ -65,9 +65,10 @@ static void test_roundtrip(const char *dir, const cf_image *image) {
     differ += file.pixels[i] != memory.pixels[i];
     worst = fmax(worst, fabs(memory.pixels[i] - image->pixels[i]));
   }
-  printf("round trip at quality 85, 4:2:0: %zu of %zu values differ from the file's; the "
-         "codec moved values by up to %.1f codes\n",
-         differ, n, 255.0 * worst);
+  printf(
+      "round trip at quality 85, 4:2:0: %zu of %zu values differ from the file's; the "
+      "codec moved values by up to %.1f codes\n",
+      differ, n, 255.0 * worst);
   CHECK(s == CF_OK && differ == 0, "%zu values differ from the file's", differ);
   CHECK(worst > 0.5 / 255.0, "the round trip changed nothing: not a JPEG coding");
   cf_image_free(&memory);

@@ -98,6 +98,30 @@ static void check_exposures(const char *folder) {
   json_decref(doc);
 }
 
+/* A JPEG whose mask leaves it no observation: the capture warns, and the
+ * fit models the coding of the other images (it failed: "the images
+ * chosen have no observations"). */
+static void check_empty_image(const char *dir) {
+  cf_synth_options so;
+  jpeg_options(&so, 2, 160, 120);
+  so.write_masks = 1;
+  char folder[512], path[600];
+  if (!fit_test_render(dir, "empty", &so, folder, sizeof folder)) return;
+  snprintf(path, sizeof path, "%s/masks/000.jpg", folder);
+  cf_image blank = {0};
+  cf_error err = {0};
+  cf_status s = cf_image_alloc(&blank, so.width, so.height, 1, &err);
+  if (s == CF_OK) s = cf_image_write(path, &blank, 8, &err);
+  cf_image_free(&blank);
+  CHECK(s == CF_OK, "%s", err.message);
+  cf_fit_result r;
+  if (s == CF_OK && fit_folder(folder, 0, &r)) {
+    CHECK(r.jpeg_images == 3, "the coding modelled in %d images, 3 with observations",
+          r.jpeg_images);
+    cf_fit_result_free(&r);
+  }
+}
+
 static int end_to_end(const char *dir) {
   cf_synth_options so;
   jpeg_options(&so, 1, 160, 120);
@@ -136,6 +160,7 @@ static int end_to_end(const char *dir) {
     }
     cf_fit_result_free(&r);
   }
+  check_empty_image(dir);
   return check_finish("test_fit_jpeg");
 }
 
@@ -151,8 +176,7 @@ static int coverage(const char *dir, int seeds, int width, int height, int plain
     snprintf(name, sizeof name, "seed%d", seed);
     snprintf(what, sizeof what, "seed %2d", seed);
     cf_fit_result r;
-    if (!fit_test_render(dir, name, &so, folder, sizeof folder) ||
-        !fit_folder(folder, plain, &r))
+    if (!fit_test_render(dir, name, &so, folder, sizeof folder) || !fit_folder(folder, plain, &r))
       continue;
     int n = 0;
     inside += within_two_sd(&r, what, &n);
@@ -172,7 +196,8 @@ static int coverage(const char *dir, int seeds, int width, int height, int plain
 static int sweep(const char *dir, int large) {
   int seeds = large ? LARGE_SEEDS : SEEDS;
   double rate, plain_rate = 0.0;
-  int fits = large ? coverage(dir, seeds, 320, 240, 0, &rate) : coverage(dir, seeds, 160, 120, 0, &rate);
+  int fits =
+      large ? coverage(dir, seeds, 320, 240, 0, &rate) : coverage(dir, seeds, 160, 120, 0, &rate);
   CHECK(fits == seeds, "only %d of %d fits", fits, seeds);
   CHECK(rate >= 0.8, "2-sd coverage %.3f is below 0.8: the JPEG sds are too small", rate);
   CHECK(rate < 1.0, "every slot within 2 sd: the sds may be too large");
@@ -191,7 +216,7 @@ int main(int argc, char **argv) {
   if (!fit_test_make_dir(dir, sizeof dir)) return 1;
   int status = argc > 1 && strcmp(argv[1], "sweep") == 0         ? sweep(dir, 0)
                : argc > 1 && strcmp(argv[1], "sweep-large") == 0 ? sweep(dir, 1)
-                                                                  : end_to_end(dir);
+                                                                 : end_to_end(dir);
   fit_test_remove_dir(dir);
   return status;
 }
