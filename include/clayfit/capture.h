@@ -168,6 +168,8 @@ typedef struct cf_capture_summary {
   double silhouette_kept;  /* fraction of the silhouettes' points that fit the sphere */
   int radiometry_relative; /* lights known only up to one common factor */
   int tone_curve_unknown;
+  int transfer;          /* the declared encoding, a cf_transfer (image.h) */
+  double transfer_gamma; /* its gamma (CF_TRANSFER_GAMMA) */
   int has_noise;
   double noise_read, noise_shot; /* variance = read² + shot · radiance */
   size_t warnings;

@@ -111,6 +111,10 @@ typedef struct cf_fit_options {
    * anyway */
   size_t budget;
   cf_sampling sampling;
+  int no_response_starts; /* 1: an unknown tone curve's shape only from the
+                             start's (the model choice's candidates; by
+                             default the fit also tries the common camera
+                             curves' shapes, fit_response_starts.h) */
   int jpeg_plain;          /* 1: leave JPEG's coding error out of the model
                              (default 0: JPEG photos whose quality their
                              tables give are compared with the prediction

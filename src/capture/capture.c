@@ -162,6 +162,8 @@ void cf_capture_summarize(const cf_capture *capture, cf_capture_summary *summary
   summary->silhouette_kept = capture->silhouette_kept;
   summary->radiometry_relative = spec->radiometry_relative && !capture->from_reference;
   summary->tone_curve_unknown = spec->tone_curve_unknown;
+  summary->transfer = (int)spec->transfer;
+  summary->transfer_gamma = spec->gamma;
   summary->has_noise = spec->has_noise;
   summary->noise_read = spec->noise_read;
   summary->noise_shot = spec->noise_shot;

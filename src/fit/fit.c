@@ -4,9 +4,11 @@
  *      the scale; the global scale; the exposures) (fit_plan.c);
  *   2. the closed-form albedo from the least specular observations, then
  *      the deterministic multi-start on a subsample (fit_multistart.c);
- *   3. the best start refined on a larger subsample, then on every
- *      observation, with the robust loss and, for a noise model, weights
- *      from the prediction to their fixed point;
+ *   3. the best start refined on a larger subsample (with an unknown tone
+ *      curve, then the curve's shape from a few starts,
+ *      fit_response_starts.c), then on every observation, with the
+ *      robust loss and, for a noise model, weights from the prediction to
+ *      their fixed point;
  *   4. the covariance (ceres::Covariance); parameters the capture does not
  *      constrain are held at their defaults, named, and the fit repeated
  *      (fit_uncertainty.c);
@@ -29,6 +31,7 @@
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
+#include "fit_response_starts.h"
 #include "fit_run.h"
 #include "fit_uncertainty.h"
 #include "lsq/lsq.h"
@@ -584,6 +587,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   clock = then;
   s = refine_on_subsample(capture, population, o, &run.plan, REFINE_TARGET, run.sigma, params,
                           &log_scale, r, &run.switched, err);
+  if (s == CF_OK) /* an unknown tone curve: the curve's shape from a few starts */
+    s = fit_response_starts(capture, population, o, &run.plan, run.sigma, params, &log_scale,
+                            response, err);
   if (s != CF_OK) return s;
   r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
   clock = then;

@@ -90,7 +90,8 @@ static void fit_candidate(void *user, int i) {
   cf_fit_options o = w->options[m];
   o.model = (cf_model_id)m;
   o.progress = NULL;
-  o.jpeg_plain = 1; /* the candidates are scored on the photos as they are */
+  o.jpeg_plain = 1;         /* the candidates are scored on the photos as they are */
+  o.no_response_starts = 1; /* (the chosen model's fit tries the curve's shapes once) */
   if (w->side_by_side) o.threads = 1;
   cf_error err = {0};
   double clock = cf_now_seconds();

@@ -175,8 +175,7 @@ static cf_status problem_at_fit(fit_problem *p, const cf_capture *capture,
   return s;
 }
 
-/* Σ w log σ over p's uncensored residuals (fit_score_at's log_sigma). */
-static cf_status sum_log_sigma(const fit_problem *p, double *sum, cf_error *err) {
+cf_status fit_sum_log_sigma(const fit_problem *p, double *sum, cf_error *err) {
   size_t n = 3 * p->count;
   double *prediction = malloc(n * sizeof *prediction), *measured = malloc(n * sizeof *measured);
   cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
@@ -231,7 +230,7 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
   if (log_sigma) *log_sigma = 0.0;
   if (s == CF_OK && log_sigma && fit->response_fitted &&
       (fit_capture_has_noise(capture) || fit_problem_sigma_through_curve(&p)))
-    s = sum_log_sigma(&p, log_sigma, err);
+    s = fit_sum_log_sigma(&p, log_sigma, err);
   if (s == CF_OK) s = fit_statistics(&p, o, stats, err);
   if (s == CF_OK && fit->exposures) {
     stats->exposures = malloc(fit->images * sizeof *stats->exposures);

@@ -35,4 +35,8 @@ cf_status fit_score_at(const cf_capture *capture, const fit_population *populati
                        const cf_fit_result *fit, double sigma, const cf_fit_options *o,
                        double *cost, double *log_sigma, cf_fit_result *stats, cf_error *err);
 
+/* Σ w log σ over p's uncensored residuals at its current values and σ
+ * (fit_score_at's log_sigma; the response's starts, fit_response_starts.c). */
+cf_status fit_sum_log_sigma(const fit_problem *p, double *sum, cf_error *err);
+
 #endif /* CLAYFIT_FIT_RESIDUALS_H */
