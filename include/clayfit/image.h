@@ -190,6 +190,11 @@ typedef struct cf_decode {
 unsigned cf_decode_pixel(const cf_decode *decode, const float *stored, int channels,
                          double radiance[3]);
 
+/* A transfer's stored value to linear (gamma: CF_TRANSFER_GAMMA's), odd
+ * symmetric below 0; cf_decode_pixel's, before the black level and the
+ * exposure. */
+double cf_transfer_to_linear(cf_transfer transfer, double gamma, double stored);
+
 /* The inverse: the stored value that decodes to `radiance` (one channel,
  * clip level aside), and (slope not NULL) d stored / d radiance. */
 double cf_encode_value(const cf_decode *decode, double radiance, double *slope);

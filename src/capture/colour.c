@@ -117,16 +117,20 @@ double cf_response_decode(cf_response response, double code) {
 }
 
 /* transfer⁻¹: stored value to linear. */
-static double to_linear(const cf_decode *decode, double stored) {
-  switch (decode->transfer) {
+double cf_transfer_to_linear(cf_transfer transfer, double gamma, double stored) {
+  switch (transfer) {
     case CF_TRANSFER_SRGB:
       return cf_srgb_to_linear(stored);
     case CF_TRANSFER_GAMMA:
-      return stored < 0.0 ? -pow(-stored, decode->gamma) : pow(stored, decode->gamma);
+      return stored < 0.0 ? -pow(-stored, gamma) : pow(stored, gamma);
     case CF_TRANSFER_LINEAR:
       break;
   }
   return stored;
+}
+
+static double to_linear(const cf_decode *decode, double stored) {
+  return cf_transfer_to_linear(decode->transfer, decode->gamma, stored);
 }
 
 /* transfer: linear to stored value, and its derivative. */

@@ -371,6 +371,11 @@ struct JpegSettings {
 };
 const JpegSettings kLosslessAsCanBe = {100, "4:4:4"};
 
+/* OpenImageIO's name of a chroma subsampling. */
+const char *subsampling_name(cf_chroma chroma) {
+  return chroma == CF_CHROMA_420 ? "4:2:0" : chroma == CF_CHROMA_422 ? "4:2:2" : "4:4:4";
+}
+
 cf_status write_image(const char *path, const cf_image *image, int bits, const cf_image_info *info,
                       const JpegSettings &jpeg, cf_error *err) {
   if (!image || !image->pixels || image->width <= 0 || image->height <= 0 || image->channels < 1 ||
@@ -503,9 +508,7 @@ cf_status cf_image_write_jpeg(const char *path, const cf_image *image, int quali
   std::string ext = extension_of(path);
   if (kind_of(ext) != Kind::jpeg)
     return cf_error_set(err, CF_EINVAL, "%s: a JPEG needs the extension .jpg or .jpeg", path);
-  const char *subsampling = chroma == CF_CHROMA_420   ? "4:2:0"
-                            : chroma == CF_CHROMA_422 ? "4:2:2"
-                                                      : "4:4:4";
+  const char *subsampling = subsampling_name(chroma);
   try {
     return write_image(path, image, 8, info, JpegSettings{quality, subsampling}, err);
   } catch (const std::exception &e) {
@@ -563,9 +566,7 @@ cf_status cf_image_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chr
     return cf_error_set(err, CF_EINVAL, "a JPEG round trip needs a 3-channel image");
   if (quality < 1 || quality > 100)
     return cf_error_set(err, CF_EINVAL, "JPEG quality %d is outside [1, 100]", quality);
-  const char *subsampling = chroma == CF_CHROMA_420   ? "4:2:0"
-                            : chroma == CF_CHROMA_422 ? "4:2:2"
-                                                      : "4:4:4";
+  const char *subsampling = subsampling_name(chroma);
   try {
     return jpeg_roundtrip(in, quality, subsampling, out, err);
   } catch (const std::exception &e) {

@@ -43,13 +43,7 @@ static cf_status problem_of_image(const fit_problem *p, const cf_capture *captur
   if (s == CF_OK)
     s = fit_problem_init(q, capture, p->model, population.index, population.count, threads, err);
   if (s != CF_OK) return s;
-  memcpy(q->params, p->params, sizeof q->params);
-  q->log_scale = p->log_scale;
-  memcpy(q->response, p->response, sizeof q->response);
-  q->response_on = p->response_on;
-  memcpy(q->log_exposures, p->log_exposures, p->images * sizeof *q->log_exposures);
-  memcpy(q->log_balance, p->log_balance, 3 * p->images * sizeof *q->log_balance);
-  memcpy(q->log_light, p->log_light, p->light_count * sizeof *q->log_light); /* (per light) */
+  fit_problem_copy_values(q, p);
   fit_problem_clear_unknowns(q);
   s = fit_problem_finish(q, err);
   if (s == CF_OK) fit_problem_set_sigma(q, capture, p->sigma);

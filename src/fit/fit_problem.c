@@ -510,6 +510,15 @@ void fit_problem_free_response(fit_problem *p) {
   p->response_on = 1;
 }
 
+void fit_problem_copy_values(fit_problem *to, const fit_problem *from) {
+  memcpy(to->params, from->params, sizeof to->params);
+  to->log_scale = from->log_scale;
+  memcpy(to->response, from->response, sizeof to->response);
+  memcpy(to->log_exposures, from->log_exposures, from->images * sizeof *to->log_exposures);
+  memcpy(to->log_balance, from->log_balance, 3 * from->images * sizeof *to->log_balance);
+  memcpy(to->log_light, from->log_light, from->light_count * sizeof *to->log_light);
+}
+
 void fit_response_identity(double *slopes) {
   for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) slopes[j] = 1.0;
 }

@@ -282,6 +282,12 @@ void fit_problem_free_light_gains(fit_problem *p);
 void fit_problem_free_balance(fit_problem *p);
 void fit_problem_free_response(fit_problem *p);
 
+/* The current values (parameters, scale, response, the gains, the white
+ * balance, the lights' gains) of `from` into `to`, a problem over the
+ * same capture (its images and lights; another set of observations);
+ * fit_problem_clear_unknowns then sets what they switch on. */
+void fit_problem_copy_values(fit_problem *to, const fit_problem *from);
+
 /* The response's slopes all 1 (linear); is it the identity? */
 void fit_response_identity(double *slopes);
 int fit_response_is_identity(const double *slopes);

@@ -32,21 +32,16 @@ static double mean_log_level(const fit_problem *p) {
   return n ? sum / (double)n : log(0.25);
 }
 
-/* The declared encoding's decoding of a code v. */
-static double declared_decode(const cf_capture_summary *about, double v) {
-  if (about->transfer == CF_TRANSFER_SRGB) return cf_srgb_to_linear(v);
-  if (about->transfer == CF_TRANSFER_GAMMA) return pow(v, about->transfer_gamma);
-  return v;
-}
-
 /* The knots' log-log slopes of R = the declared decoding of camera curve
  * `camera`'s codes (within the slopes' bounds). */
 static void camera_slopes(const cf_capture_summary *about, cf_response camera, double *slopes) {
   const double h = 0.05; /* in log x */
   for (int j = 0; j < K; ++j) {
     double x = cf_response_model_knot(j);
-    double up = declared_decode(about, cf_response_encode(camera, x * exp(h)));
-    double down = declared_decode(about, cf_response_encode(camera, x * exp(-h)));
+    double up = cf_transfer_to_linear((cf_transfer)about->transfer, about->transfer_gamma,
+                                      cf_response_encode(camera, x * exp(h)));
+    double down = cf_transfer_to_linear((cf_transfer)about->transfer, about->transfer_gamma,
+                                        cf_response_encode(camera, x * exp(-h)));
     double slope = log(up / down) / (2.0 * h);
     slopes[j] = fmin(CF_RESPONSE_MODEL_SLOPE_UPPER, fmax(CF_RESPONSE_MODEL_SLOPE_LOWER, slope));
   }
@@ -62,8 +57,7 @@ static int same_start(const double *a, const double *b) {
 /* The starting shapes: the given curve (the model choice's, or NULL),
  * the identity, then the declared decoding of each common camera curve's
  * codes, each shape once. Returns how many. */
-static int start_shapes(const cf_capture_summary *about, const double *given,
-                        double starts[][K]) {
+static int start_shapes(const cf_capture_summary *about, const double *given, double starts[][K]) {
   int count = 0;
   if (given) memcpy(starts[count++], given, sizeof starts[0]);
   fit_response_identity(starts[count]);
@@ -86,8 +80,8 @@ static cf_status neg_log_likelihood(fit_problem *p, const cf_capture *capture, i
                                     double *nll, cf_error *err) {
   size_t n = (size_t)p->num_unknowns;
   double *jtj = malloc((n * n + n + 1) * sizeof *jtj), cost = 0.0, logs = 0.0;
-  cf_status s = jtj ? fit_problem_reweight(p, capture, err)
-                    : cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_status s =
+      jtj ? fit_problem_reweight(p, capture, err) : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) s = fit_normal_equations(p, threads, jtj, jtj + n * n, &cost, err);
   if (s == CF_OK) s = fit_sum_log_sigma(p, &logs, err);
   free(jtj);
@@ -160,8 +154,7 @@ static cf_status one_start(start_run *run, const fit_plan *plan, const double *s
 
 cf_status fit_response_starts(const cf_capture *capture, const fit_population *population,
                               const cf_fit_options *o, const fit_plan *plan, double sigma,
-                              double *params, double *log_scale, double *response,
-                              cf_error *err) {
+                              double *params, double *log_scale, double *response, cf_error *err) {
   cf_capture_summary about;
   cf_capture_summarize(capture, &about);
   if (!about.tone_curve_unknown || o->no_response_starts) return CF_OK;

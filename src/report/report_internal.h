@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "clayfit/report.h"
+#include "svg.h"
 
 enum { REPORT_CENSORED = 1u << 0, REPORT_REJECTED = 1u << 1 };
 
@@ -59,6 +60,11 @@ typedef struct report_plot {
   const char *key, *title, *file;
 } report_plot;
 extern const report_plot report_plots[REPORT_PLOT_COUNT];
+/* Every plot's size in the page, in pixels. */
+enum { REPORT_PLOT_WIDTH = 560, REPORT_PLOT_HEIGHT = 340 };
+/* Begin plot `info` in DIR (svg_begin at that size), its path into path. */
+cf_status report_plot_begin(svg_plot *plot, const char *dir, const report_plot *info, char *path,
+                            size_t size, cf_error *err);
 cf_status report_write_plots(const report_data *d, const char *dir, cf_error *err);
 /* The fitted camera response curve with its ±2 sd band
  * (report_response.c): written, and listed in report.json and on the page,

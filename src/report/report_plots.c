@@ -16,12 +16,12 @@ const report_plot report_plots[REPORT_PLOT_COUNT] = {
     {"timing", "Where the fit's time went", "plots/timing.svg"},
 };
 
-enum { WIDTH = 560, HEIGHT = 340, ANGLE_BINS = 45, HISTOGRAM_BINS = 64 };
+enum { ANGLE_BINS = 45, HISTOGRAM_BINS = 64 };
 
-static cf_status open_plot(svg_plot *plot, const char *dir, int which, char *path, size_t size,
-                           cf_error *err) {
-  snprintf(path, size, "%s/%s", dir, report_plots[which].file);
-  return svg_begin(plot, path, WIDTH, HEIGHT, report_plots[which].title, err);
+cf_status report_plot_begin(svg_plot *plot, const char *dir, const report_plot *info, char *path,
+                            size_t size, cf_error *err) {
+  snprintf(path, size, "%s/%s", dir, info->file);
+  return svg_begin(plot, path, REPORT_PLOT_WIDTH, REPORT_PLOT_HEIGHT, info->title, err);
 }
 
 /* Mean and RMS of the residual in bins of an angle (0–90°). */
@@ -49,7 +49,7 @@ static cf_status angle_plot(const report_data *d, const float *angle, int which,
   for (int b = 0; b < ANGLE_BINS; ++b) minus[b] = -rms[b];
   svg_plot plot = {0};
   char path[4096];
-  cf_status s = open_plot(&plot, dir, which, path, sizeof path, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_plots[which], path, sizeof path, err);
   if (s != CF_OK) return s;
   plot.x0 = 0.0, plot.x1 = 90.0, plot.y0 = lo * 1.1, plot.y1 = hi * 1.1;
   svg_axes(&plot, x_label, "residual (prediction - photo) / sigma");
@@ -80,7 +80,7 @@ static cf_status histogram_plot(const report_data *d, const char *dir, cf_error 
   }
   svg_plot plot = {0};
   char path[4096];
-  cf_status s = open_plot(&plot, dir, 2, path, sizeof path, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_plots[2], path, sizeof path, err);
   if (s != CF_OK) return s;
   plot.x0 = lo, plot.x1 = hi, plot.y0 = 0.0, plot.y1 = peak * 1.1;
   svg_axes(&plot, "residual / sigma (channels combined: sum / sqrt(count))", "observations");
@@ -112,11 +112,11 @@ static cf_status lobe_plot(const report_data *d, const char *dir, cf_error *err)
   double decades = log10(hi / lo) > 0.0 ? log10(hi / lo) : 1.0;
   svg_plot plot = {0};
   char path[4096], label[64];
-  cf_status s = open_plot(&plot, dir, 3, path, sizeof path, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_plots[3], path, sizeof path, err);
   if (s != CF_OK) return s;
   plot.x0 = -1.0, plot.x1 = 1.0, plot.y0 = 0.0, plot.y1 = 1.0;
   plot.width = plot.height * 2.0; /* a half disc: equal scales */
-  plot.left = (WIDTH - plot.width) / 2.0;
+  plot.left = (REPORT_PLOT_WIDTH - plot.width) / 2.0;
   double arc_x[181], arc_y[181];
   for (int ring = 1; ring <= 3; ++ring) {
     for (int i = 0; i <= 180; ++i)
@@ -185,7 +185,7 @@ static cf_status convergence_plot(const report_data *d, const char *dir, cf_erro
   if (!(hi > lo)) hi = lo * 10.0;
   svg_plot plot = {0};
   char path[4096];
-  cf_status s = open_plot(&plot, dir, 4, path, sizeof path, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_plots[4], path, sizeof path, err);
   if (s != CF_OK) return s;
   double span = (double)(starts > iterations ? starts : iterations);
   plot.x0 = 0.0, plot.x1 = span > 1.0 ? span : 1.0, plot.y0 = lo / 2.0, plot.y1 = hi * 2.0;
@@ -214,7 +214,7 @@ static cf_status timing_plot(const report_data *d, const char *dir, cf_error *er
   }
   svg_plot plot = {0};
   char path[4096], label[64];
-  cf_status s = open_plot(&plot, dir, 5, path, sizeof path, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_plots[5], path, sizeof path, err);
   if (s != CF_OK) return s;
   plot.x0 = 0.0, plot.x1 = 6.0, plot.y0 = 0.0, plot.y1 = total > 0.0 ? total * 1.15 : 1.0;
   plot.no_x_ticks = 1;

@@ -12,7 +12,7 @@
 const report_plot report_response_plot_info = {
     "response", "The camera response recovered (unknown tone curve)", "plots/response.svg"};
 
-enum { WIDTH = 560, HEIGHT = 340, SAMPLES = 129 };
+enum { SAMPLES = 129 };
 
 cf_status report_response_plot(const report_data *d, const char *dir, cf_error *err) {
   const cf_fit_result *r = &d->fit->result;
@@ -28,8 +28,7 @@ cf_status report_response_plot(const report_data *d, const char *dir, cf_error *
   for (int i = 0; i < SAMPLES; ++i) top = fmax(top, fmin(upper[i], 4.0));
   svg_plot plot = {0};
   char path[4096];
-  snprintf(path, sizeof path, "%s/%s", dir, report_response_plot_info.file);
-  cf_status s = svg_begin(&plot, path, WIDTH, HEIGHT, report_response_plot_info.title, err);
+  cf_status s = report_plot_begin(&plot, dir, &report_response_plot_info, path, sizeof path, err);
   if (s != CF_OK) return s;
   plot.x0 = 0.0, plot.x1 = 1.0, plot.y0 = 0.0, plot.y1 = top;
   svg_axes(&plot, "decoded photo value y (the declared curve's linear value; 1: the top code)",
