@@ -38,8 +38,26 @@ def dot(a, b):
 
 
 def fresnel(f0, c):
-    m = 1.0 - np.clip(c, 0.0, 1.0)
-    return f0 + (1.0 - f0) * m**5
+    """The exact dielectric Fresnel from eta (docs/model.md (8), model version 2;
+    Walter et al. 2007 eq. 22); F = 0 at F0 = 0."""
+    c = np.clip(c, 0.0, 1.0)
+    if f0 <= 0.0:
+        return np.zeros_like(c)
+    sq = np.sqrt(f0)
+    g = np.sqrt(4.0 * sq / ((1.0 - sq) * (1.0 - sq)) + c * c)
+    a = (g - c) / (g + c)
+    b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
+    return 0.5 * a * a * (1.0 + b * b)
+
+
+def fresnel_mean(eta):
+    """Its cosine-weighted hemispherical mean for light from outside, closed
+    form (docs/model.md (27)), eta > 1."""
+    e2, e4 = eta * eta, eta**4
+    return (0.5 + (eta - 1.0) * (3.0 * eta + 1.0) / (6.0 * (eta + 1.0) ** 2)
+            + e2 * (e2 - 1.0) ** 2 / (e2 + 1.0) ** 3 * np.log((eta - 1.0) / (eta + 1.0))
+            - 2.0 * e2 * eta * (e2 + 2.0 * eta - 1.0) / ((e2 + 1.0) * (e4 - 1.0))
+            + 8.0 * e4 * (e4 + 1.0) / ((e2 + 1.0) * (e4 - 1.0) ** 2) * np.log(eta))
 
 
 def ggx_d(alpha, c_h):
@@ -95,7 +113,7 @@ def clay(p, n, l, v):
     lp = (l - c_i[:, None] * n) / eta + c_ip[:, None] * n
     vp = (v - c_o[:, None] * n) / eta + c_op[:, None] * n
     trans = (1.0 - fresnel(f0_1, c_i)) * (1.0 - fresnel(f0_1, c_o))
-    fbar_e = f0_1 + (1.0 - f0_1) / 21.0
+    fbar_e = fresnel_mean(eta)
     fbar_i = 1.0 - (1.0 - fbar_e) / (eta * eta)
     base_spec = specular(f0_2, r2, n, lp, vp)
     base_trans = (1.0 - fresnel(f0_2, c_ip)) * (1.0 - fresnel(f0_2, c_op))

@@ -1,4 +1,6 @@
-/* The exact reductions of docs/model.md §4.5: M1 with σ = 0 is M0; M3 with w_c = 0 is
+/* The exact reductions of docs/model.md §4.5: M2 with F0 = 0 is M1 (the exact
+ * Fresnel vanishes there, model version 2; under Schlick's it did not);
+ * M1 with σ = 0 is M0; M3 with w_c = 0 is
  * M2; M4 with τ = 0 has a = 1; M4 with τ large (exp underflows) is its top
  * specular S(F0_1, r1; l, v), which M2 with ρ = 0 computes independently. */
 #include <math.h>
@@ -10,11 +12,64 @@
 
 CHECK_MAIN_STATE;
 
-enum { CASES = 20000 };
+enum { CASES = 20000, MAX_GEOMETRIES = 512 };
+
+/* |a − b| <= 1e-14 |b| (the ladder's nesting; measured: equal to the bit) */
+static int nested(double a, double b) {
+  return fabs(a - b) <= 1e-14 * fabs(b);
+}
+
+/* M2(F0 = 0) == M1 and M1(σ = 0) == M0 at one geometry, with M2's
+ * parameters `m2` (F0 and, for the second, σ overwritten). Returns the
+ * number of values not equal to the bit. */
+static int check_ladder(const char *set, long i, const double *m2_in, const double n[3],
+                        const double l[3], const double v[3]) {
+  double m2[CF_DIELECTRIC_DIM], f_m2[3], f_m1[3], f_m0[3];
+  for (int k = 0; k < CF_DIELECTRIC_DIM; ++k) m2[k] = m2_in[k];
+  m2[CF_DIELECTRIC_F0] = 0.0;
+  _Static_assert((int)CF_DIELECTRIC_ALBEDO == (int)CF_OREN_NAYAR_ALBEDO &&
+                     (int)CF_DIELECTRIC_DIFFUSE_ROUGHNESS == (int)CF_OREN_NAYAR_DIFFUSE_ROUGHNESS,
+                 "M2's vector starts with M1's");
+  cf_eval(CF_MODEL_DIELECTRIC, m2, n, l, v, f_m2, NULL);
+  cf_eval(CF_MODEL_OREN_NAYAR, m2, n, l, v, f_m1, NULL);
+  int not_bitwise = 0;
+  for (int c = 0; c < 3; ++c) {
+    CHECK(nested(f_m2[c], f_m1[c]), "%s case %ld: M2(f0=0) %.17g != M1 %.17g (r %g, sigma %g)", set,
+          i, f_m2[c], f_m1[c], m2[CF_DIELECTRIC_ROUGHNESS], m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS]);
+    not_bitwise += f_m2[c] != f_m1[c];
+  }
+  m2[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] = 0.0;
+  cf_eval(CF_MODEL_OREN_NAYAR, m2, n, l, v, f_m1, NULL);
+  cf_eval(CF_MODEL_LAMBERT, m2, n, l, v, f_m0, NULL);
+  cf_eval(CF_MODEL_DIELECTRIC, m2, n, l, v, f_m2, NULL);
+  for (int c = 0; c < 3; ++c) {
+    CHECK(nested(f_m1[c], f_m0[c]), "%s case %ld: M1(sigma=0) %.17g != M0 %.17g", set, i, f_m1[c],
+          f_m0[c]);
+    CHECK(nested(f_m2[c], f_m0[c]), "%s case %ld: M2(f0=0, sigma=0) %.17g != M0 %.17g", set, i,
+          f_m2[c], f_m0[c]);
+    not_bitwise += (f_m1[c] != f_m0[c]) + (f_m2[c] != f_m0[c]);
+  }
+  return not_bitwise;
+}
+
+/* The ladder's nesting over the hard geometries of §4.1 with random
+ * parameters (roughness and albedo at their bounds among them). */
+static long ladder_on_hard_geometries(cf_rng *rng) {
+  static double n[MAX_GEOMETRIES][3], l[MAX_GEOMETRIES][3], v[MAX_GEOMETRIES][3];
+  size_t count = hard_geometries(n, l, v, MAX_GEOMETRIES);
+  long not_bitwise = 0;
+  for (int rep = 0; rep < 20; ++rep) {
+    double m2[CF_DIELECTRIC_DIM];
+    random_params(rng, CF_MODEL_DIELECTRIC, 0.3, m2);
+    for (size_t i = 0; i < count; ++i)
+      not_bitwise += check_ladder("hard", (long)(rep * count + i), m2, n[i], l[i], v[i]);
+  }
+  return not_bitwise;
+}
 
 int main(void) {
   cf_rng rng = cf_rng_seed(77);
-  long lit = 0;
+  long lit = 0, not_bitwise = 0;
   double worst_top = 0.0;
   for (int i = 0; i < CASES; ++i) {
     double n[3], l[3], v[3];
@@ -30,6 +85,11 @@ int main(void) {
     cf_eval(CF_MODEL_LAMBERT, on, n, l, v, f_l, NULL); /* albedo is slot 0 in both */
     for (int c = 0; c < 3; ++c)
       CHECK(f_on[c] == f_l[c], "case %d: M1(sigma=0) %.17g != M0 %.17g", i, f_on[c], f_l[c]);
+
+    /* M2(F0 = 0) == M1, M1(σ = 0) == M0 (and M2 at both == M0), to 1e-14 */
+    double dielectric[CF_DIELECTRIC_DIM];
+    random_params(&rng, CF_MODEL_DIELECTRIC, 0.1, dielectric);
+    not_bitwise += check_ladder("random", i, dielectric, n, l, v);
 
     /* M3(w_c = 0) == M2, to the bit */
     double cc[CF_CLEARCOAT_DIM], f_cc[3], f_d[3];
@@ -77,9 +137,11 @@ int main(void) {
       }
     }
   }
+  not_bitwise += ladder_on_hard_geometries(&rng);
   printf(
       "%d cases (%ld lit); M4 at large tau vs M2(rho=0): worst relative "
-      "difference %.3g\n",
-      CASES, lit, worst_top);
+      "difference %.3g; ladder M2(f0=0) = M1, M1(sigma=0) = M0: %ld values not equal to the "
+      "bit (within 1e-14)\n",
+      CASES, lit, worst_top, not_bitwise);
   return check_finish("test_reductions");
 }

@@ -297,63 +297,97 @@ typedef struct cf_fit_result {
 
 /* ---- the choice of the model (clayfit fit --model auto) ----
  *
- * Every model of the ladder M0 → M4 is fitted to the training part of a
- * sample of the observations (at most CF_FIT_CHOICE_SAMPLE, spread evenly)
- * and judged two ways:
- *   BIC      2 C + k ln n on the training part, C = ½ Σ ρ(r²) at one σ
- *            for all candidates (the capture's noise model, or the smallest
- *            σ the candidates estimated), k the unknowns fitted, n the
- *            residuals;
- *   held out the robust RMS √(mean ρ(r²)) (in units of σ) on the held-out
- *            part: every fourth image (with four or more images and no
- *            exposures fitted; with a light per image, as in DiLiGenT,
- *            these are held-out lights), else the last image, else every
- *            fourth observation.
- * Going up the ladder, a richer model replaces the current choice only
- * when it is clearly better on both: BIC lower by more than bic_margin
- * (10: "very strong" evidence, Kass & Raftery 1995) and the held-out RMS
- * lower by more than heldout_margin (1 %: a model error of about a seventh
- * of the noise). The chosen model is then fitted to every observation,
- * starting from its candidate fit. */
+ * Every candidate (the ladder M0 → M4, simplest first: fit_choice.c's
+ * table of rungs) is fitted to the training part of a sample of the
+ * observations (at most CF_FIT_CHOICE_SAMPLE, spread evenly), with the
+ * fit's own loss, and judged two ways:
+ *   BIC      2 C + k ln n on the training part, C = ½ Σ ρ(r²) (the fits'
+ *            loss: what they minimised) at one σ for all candidates (the
+ *            capture's noise model, or the smallest σ the candidates
+ *            estimated), k the unknowns fitted, n the residuals;
+ *   held out the RMS √(mean r²) (in units of σ) on the held-out part,
+ *            without the robust loss (censored channels as the objective
+ *            has them), so that no model can improve it by calling a whole
+ *            highlight an outlier:
+ *            every fourth image (with four or more images and no exposures
+ *            fitted; with a light per image, as in DiLiGenT, these are
+ *            held-out lights), else the last image, else every fourth
+ *            observation.
+ * The decision (fit_choice.c):
+ *   1. the walk: going up the ladder, a richer model replaces the current
+ *      choice only when clearly better on both: BIC lower by more than
+ *      bic_margin (10: "very strong" evidence, Kass & Raftery 1995) and
+ *      the held-out RMS lower by more than heldout_margin (1 %: a model
+ *      error of about a seventh of the noise);
+ *   2. the guard: a choice whose held-out RMS is more than heldout_guard
+ *      (10 %) above the lowest is replaced by the simplest candidate
+ *      within 10 % of the lowest, unless its BIC is lower than that one's
+ *      by more than bic_margin (the note then says so);
+ *   3. the physical reading: a choice whose film is a second lobe
+ *      (cf_fit_choice.reading) gives way to a candidate marked as the
+ *      simpler physical reading (a single tailed lobe) when that one does
+ *      as well within the margins (held-out RMS at most heldout_margin
+ *      above, BIC at most bic_margin above).
+ * The chosen model is then fitted to every observation, starting from its
+ * candidate fit. */
 /* 3·10⁴: on the demo capture and DiLiGenT the same choices as 6·10⁴, the
  * margins still far beyond the thresholds (BIC M3 → M4 by 6300 and 38600),
  * in 1.1 s and 2.3 s instead of 2.0 s and 3.9 s */
 #define CF_FIT_CHOICE_SAMPLE 30000
 #define CF_FIT_CHOICE_BIC_MARGIN 10.0
 #define CF_FIT_CHOICE_HELDOUT_MARGIN 0.01
+#define CF_FIT_CHOICE_HELDOUT_GUARD 0.10
+/* A film that is not a film: rougher than any liquid film's surface
+ * (DiLiGenT's M4 puts 0.87 there, as a second lobe), or an F0 twice oil's
+ * 0.035 (water 0.02; η ≈ 1.72, beyond any water or oil film) */
+#define CF_FIT_FILM_MAX_ROUGHNESS 0.7
+#define CF_FIT_FILM_MAX_F0 0.07
+
+enum { CF_FIT_MAX_CANDIDATES = CF_MODEL_COUNT };
 
 typedef struct cf_fit_candidate {
   cf_model_id model;
   int ok;                  /* 0: the fit failed (why: note) */
+  int physical;            /* 1: the simpler physical reading of a model
+                              whose film is a second lobe (rule 3) */
   cf_fit_result fit;       /* on the training part (owns its arrays) */
   int parameters;          /* k */
   size_t residuals;        /* n, training */
-  double cost, bic;        /* training, at the common σ (with a fitted
-                              response and a noise model, each its own σ,
-                              the BIC with 2 Σ log σ: docs/model.md §6.8) */
+  double cost, bic;        /* training, ½ Σ ρ(r²) at the common σ (with a
+                              fitted response and a noise model, each its
+                              own σ, the BIC with 2 Σ log σ: docs/model.md
+                              §6.8) */
   size_t heldout_residuals;
-  double heldout_score;    /* √(mean ρ(r²)), σ units (with a fitted response
+  double heldout_score;    /* √(mean r²) without the loss, σ units (with a fitted response
                               and a noise model, times σ's geometric mean) */
   double heldout_rmse, heldout_relative_rmse; /* plain, radiance units */
   double seconds;
   int chosen;
-  char note[256];          /* how it compared */
+  char note[320];          /* how it compared, and why it was chosen */
 } cf_fit_candidate;
 
 typedef struct cf_fit_choice {
   int automatic;           /* 0: the model was forced (--model M) */
   cf_model_id chosen;
   int count;
-  cf_fit_candidate candidate[CF_MODEL_COUNT];
+  cf_fit_candidate candidate[CF_FIT_MAX_CANDIDATES]; /* in ladder order */
   size_t train_observations, heldout_observations;
   char heldout[256];       /* what was held out */
   double sigma;            /* the common σ (0: the capture's noise model) */
-  cf_loss loss;            /* the loss of the scores (the first model's) */
+  cf_loss loss;            /* the loss of the candidates' fits and BIC
+                              (the first model's; the held-out RMS has none) */
   double loss_scale;
-  double bic_margin, heldout_margin;
+  double bic_margin, heldout_margin, heldout_guard;
+  char reading[320];       /* what the chosen model's parameters mean where
+                              they are not what they are named after ("M4's
+                              film parameters describe a second lobe, not a
+                              film: ..."); empty if nothing to say */
   double seconds;          /* wall time of the choice (the candidates' fits
                               and scores) */
 } cf_fit_choice;
+
+/* The candidate of the chosen model (NULL if none). */
+const cf_fit_candidate *cf_fit_choice_chosen(const cf_fit_choice *choice);
 
 /* Choose the model (options[m] for model m: each candidate's holds) and fit
  * it to every observation: result is the chosen model's fit. Free both

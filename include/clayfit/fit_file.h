@@ -53,6 +53,8 @@ typedef struct cf_fit_file {
                            (owned), rmse, relative_rmse, residual counts, image_rmse and
                            image_relative_rmse (owned): as far as fit.json holds them */
   char clayfit_version[32], created[32];
+  int model_version;          /* model_version: the formulas the values were fitted with
+                                 (CF_MODEL_VERSION; 1, Schlick's Fresnel, when absent) */
   char capture_path[4096];    /* the capture to open: capture.path joined to fit.json's folder
                                  (absolute: as it is); for a fit.json written before that rule,
                                  capture.path as written (relative to the current folder) when
@@ -81,6 +83,11 @@ typedef struct cf_fit_file {
  * parsing costs up to 45 times the size (8 MiB of "[]," took 363 MB with
  * Jansson 2.14, where the earlier 256 MiB cap allowed 11 GB). */
 #define CF_FIT_FILE_MAX_SIZE ((size_t)8 << 20)
+
+/* One line for a command to print as a warning when the file's values were
+ * fitted with an older model version (docs/model.md, "Changes from version
+ * 1"); NULL when they belong to this one (CF_MODEL_VERSION). */
+const char *cf_fit_file_version_warning(const cf_fit_file *file);
 
 /* Read fit.json back (untrusted: at most CF_FIT_FILE_MAX_SIZE bytes, every
  * field type- and range-checked, errors name the file and the JSON path). A

@@ -20,6 +20,8 @@
  *   reflected radiance f·c_i of such a pair has measure zero in any image.
  * - Roughness is perceptual: the GGX width is α = r².
  * - F0 is the reflectance at normal incidence; η = (1 + √F0)/(1 − √F0).
+ *   M2-M4 use the exact dielectric Fresnel of that η (model version 2,
+ *   CF_MODEL_VERSION), which vanishes at F0 = 0.
  * - Parameters are used exactly as given, never clamped. Their ranges
  *   (cf_param_info.lower/upper, docs/model.md §1.6) are for the caller
  *   and the solver to enforce; cf_params_check() tests a vector against
@@ -54,6 +56,12 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The version of the model's formulas (docs/model.md, top), written into
+ * fit.json and the presets. 1: Schlick's Fresnel in M2-M4 (until issue 18);
+ * 2: the exact dielectric Fresnel from η (docs/model.md (8)), so that M2 at
+ * F0 = 0 is M1 and the ladder is nested. The parameters did not change. */
+#define CF_MODEL_VERSION 2
 
 /* ---------------------------------------------------------------------
  * The parameter table: the one place that describes every parameter.
@@ -239,8 +247,7 @@ typedef struct cf_geometry {
   double cos_i, cos_o, t_sq, g;
   double sin2_h, cos2_h;  /* of the half vector h = (l + v)/|l + v| */
   double c_d;             /* |l + v|/2 = v·h = l·h */
-  double weight_d;        /* Schlick's (1 − c_d)^5 */
-  double transmission;    /* (1 − (1 − c_i)^5)(1 − (1 − c_o)^5) */
+  double weight_d;        /* Schlick's (1 − c_d)^5 (M3's coat, the tailed lobe) */
   double on_angular;      /* Oren-Nayar's max(0, g)/max(c_i, c_o) */
   double coat_visibility; /* Burley's separable Smith GGX, α_g = 0.25 (M3) */
 } cf_geometry;

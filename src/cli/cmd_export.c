@@ -69,6 +69,9 @@ int cmd_export(int argc, char **argv, cli_context *ctx) {
     cli_report("export", err.message);
     return read == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
+  const char *version_warning = cf_fit_file_version_warning(&fit);
+  if (version_warning && !ctx->quiet)
+    fprintf(stderr, "clayfit export: warning: %s: %s\n", fit_path, version_warning);
   cf_export_warnings warnings = {0};
   cf_status s = cf_export_write(&fit, fit_path, format, output, &warnings, &err);
   cf_fit_file_free(&fit);

@@ -102,10 +102,13 @@ static cf_status parse_hold(const char *text, char *name, cf_fit_hold *h, cf_err
 }
 
 /* With a fitted response curve the held-out score is in decoded units
- * (times σ's geometric mean: docs/model.md §6.8). */
+ * (times σ's geometric mean: docs/model.md §6.8). Under the table, why
+ * the chosen model was chosen, and what its parameters mean. */
 static void print_choice(const cf_fit_choice *choice, int response_fitted) {
-  printf("model choice (held out: %s; BIC margin %g, held-out margin %g %%; %.3g s):\n",
-         choice->heldout, choice->bic_margin, 100.0 * choice->heldout_margin, choice->seconds);
+  printf("model choice (held out: %s; no robust loss in the held-out RMS; BIC margin %g, held-out "
+         "margin %g %%, guard %g %%; %.3g s):\n",
+         choice->heldout, choice->bic_margin, 100.0 * choice->heldout_margin,
+         100.0 * choice->heldout_guard, choice->seconds);
   printf("  model  unknowns  BIC            %-20s  held-out rel. RMSE\n",
          response_fitted ? "held-out (decoded)" : "held-out RMS (sigma)");
   for (int m = 0; m < choice->count; ++m) {
@@ -118,6 +121,9 @@ static void print_choice(const cf_fit_choice *choice, int response_fitted) {
     printf("  %-5s  %8d  %-13.6g  %-20.5g  %.4g %%%s\n", code, c->parameters, c->bic,
            c->heldout_score, 100.0 * c->heldout_relative_rmse, c->chosen ? "   <- chosen" : "");
   }
+  const cf_fit_candidate *chosen = cf_fit_choice_chosen(choice);
+  if (chosen) printf("  %s chosen: %s\n", cf_model_info_get(chosen->model)->code, chosen->note);
+  if (choice->reading[0]) printf("  meaning: %s\n", choice->reading);
 }
 
 /* A value and its standard deviation; at a bound of its range the sd is

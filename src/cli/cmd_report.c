@@ -109,6 +109,9 @@ int cmd_report(int argc, char **argv, cli_context *ctx) {
     cli_report("report", err.message);
     return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
+  const char *version_warning = cf_fit_file_version_warning(&fit);
+  if (version_warning && !ctx->quiet)
+    fprintf(stderr, "clayfit report: warning: %s: %s\n", fit_path, version_warning);
   cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "report",
                                      max_image_bytes};
   cf_capture *capture = NULL;

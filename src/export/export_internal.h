@@ -73,6 +73,55 @@ double export_sigma_fujii(double sigma);
 /* Burley's GTR1 width a = 0.1 − 0.099 gloss (docs/model.md (16)). */
 double export_gtr1_width(double gloss);
 
+/* ---- a tailed lobe (STD, docs/model.md §2.8) in the GGX-only formats
+ * (docs/presets.md, "Tailed lobes in GGX-only formats"): the GGX (r, F0)
+ * of least squares over the hemisphere, weighted as a renderer sees it. */
+
+/* The Fresnel of both lobes: Schlick's (docs/model.md (8) of model
+ * version 1) or the exact dielectric one from η = (1 + √F0)/(1 − √F0)
+ * (terms.h, model version 2). EXPORT_FRESNEL_MODELS is the models' own. */
+typedef enum export_fresnel { EXPORT_FRESNEL_SCHLICK, EXPORT_FRESNEL_DIELECTRIC } export_fresnel;
+#if defined(CF_MODEL_VERSION) && CF_MODEL_VERSION >= 2
+#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_DIELECTRIC
+#else
+#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_SCHLICK
+#endif
+
+/* Gauss-Legendre points: views (their elevation), θ_h, φ_h. The default
+ * agrees with 128 × 192 × 64 points to 1.4e-4 relative in the loss and
+ * 3.5e-5 in (r, F0), over r in [0.03, 1] and γ in [1.55, 1e6]
+ * (docs/presets.md; tests/export/test_tailed_ggx.c doubles it). */
+typedef struct export_tail_quadrature {
+  int views, thetas, phis;
+} export_tail_quadrature;
+#define EXPORT_TAIL_QUADRATURE {32, 32, 12}
+
+typedef struct export_tail_fit {
+  double r, f0;      /* the GGX fitted */
+  double rms_loss;   /* relative RMS of the fitted GGX over the lobe */
+  double naive_loss; /* the same for GGX with the tailed lobe's own (r, F0) */
+  int iterations;    /* Levenberg-Marquardt's */
+  size_t nodes;      /* quadrature points where c_i > 0 */
+} export_tail_fit;
+
+/* The fit with a chosen Fresnel, quadrature and start (NULL: the tailed
+ * lobe's (r, F0)). r and F0 in the parameter table's ranges, γ > 1.5 and
+ * finite; else CF_ERANGE with the reason. */
+cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel fresnel,
+                              const export_tail_quadrature *q, const double start[2],
+                              export_tail_fit *out, cf_error *err);
+
+/* What the exporters call: the models' Fresnel, the default quadrature. */
+cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_ggx, double *f0_ggx,
+                                 double *rms_loss, cf_error *err);
+
+/* "GGX approximation: 6.1 % RMS over the lobe" (below 0.05 %: "< 0.1 %"),
+ * the one wording of every preset. */
+void export_ggx_loss_text(double rms_loss, char *text, size_t size);
+/* The note of a tailed lobe: its (r, γ, F0), the GGX written and the loss. */
+void export_note_tailed(export_notes *n, double r, double gamma, double f0, double r_ggx,
+                        double f0_ggx, double rms_loss);
+
 /* The fitted material, read off a fit by model. */
 typedef struct export_material {
   cf_model_id model;

@@ -93,6 +93,9 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
       "fit_clayfit_version", fit->clayfit_version, "fit_created", fit->created, "capture", "path",
       json_text(fit->capture_path), "name", fit->capture_name, "radiometry", fit->radiometry);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the preset", path);
+  /* the model version the values were fitted with (docs/model.md, top) */
+  json_object_set_new(json_object_get(doc, "conventions"), "model_version",
+                      json_integer(fit->model_version));
   cf_status s = json_write_file(doc, path, JSON_INDENT(2) | JSON_REAL_PRECISION(17), err);
   json_decref(doc);
   return s;

@@ -1,22 +1,23 @@
 /* The choice of the model (clayfit fit --model auto; include/clayfit/fit.h
- * states the rule): every model of the ladder fitted to the training part
- * of a sample, scored by BIC on it and by the robust RMS on the held-out
- * part, the simplest model kept unless a richer one is clearly better on
- * both, and the chosen one fitted to every observation from its candidate
- * fit. */
-#include "clayfit/fit.h"
+ * states the rule): every candidate fitted to the training part of a
+ * sample, scored by BIC on it and by the RMS without the robust loss on
+ * the held-out part, decided by the walk up the ladder, the held-out guard
+ * and the physical reading, and the chosen one fitted to every observation
+ * from its candidate fit. */
+#include "fit_choice.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "clayfit/model.h"
 #include "core/clock.h"
-#include "lsq/parallel.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
 #include "fit_run.h"
+#include "lsq/parallel.h"
 
 /* The sample (every stride-th observation, at most CF_FIT_CHOICE_SAMPLE)
  * split into a training and a held-out part; `heldout` says how. */
@@ -70,6 +71,19 @@ static void split_free(choice_split *split) {
   free(split->test);
 }
 
+/* The candidates, simplest first. A new rung is one line here: its place
+ * in the walk, and `physical` for a single tailed lobe (M2T) that is the
+ * simpler reading of M4's stacked lobes. */
+static const fit_choice_rung rungs[] = {
+    {CF_MODEL_LAMBERT, 0},   {CF_MODEL_OREN_NAYAR, 0}, {CF_MODEL_DIELECTRIC, 0},
+    {CF_MODEL_CLEARCOAT, 0}, {CF_MODEL_CLAY, 0},
+};
+
+const fit_choice_rung *fit_choice_rungs(int *count) {
+  *count = (int)(sizeof rungs / sizeof rungs[0]);
+  return rungs;
+}
+
 /* Fit every candidate to the training part: side by side, each on one
  * thread, when the options give two threads or more (the candidates are
  * independent; a fit's result does not depend on its threads beyond the
@@ -84,11 +98,9 @@ typedef struct candidate_work {
 
 static void fit_candidate(void *user, int i) {
   candidate_work *w = user;
-  int m = CF_MODEL_COUNT - 1 - i; /* the richest, slowest first */
-  cf_fit_candidate *c = &w->choice->candidate[m];
-  c->model = (cf_model_id)m;
-  cf_fit_options o = w->options[m];
-  o.model = (cf_model_id)m;
+  cf_fit_candidate *c = &w->choice->candidate[w->choice->count - 1 - i]; /* richest first */
+  cf_fit_options o = w->options[c->model];
+  o.model = c->model;
   o.progress = NULL;
   o.jpeg_plain = 1;         /* the candidates are scored on the photos as they are */
   o.no_response_starts = 1; /* (the chosen model's fit tries the curve's shapes once) */
@@ -105,13 +117,18 @@ static void fit_candidates(const cf_capture *capture, const cf_fit_options optio
                            const fit_population *train, cf_fit_choice *choice) {
   const cf_fit_options *first = &options[0];
   int threads = fit_threads(first);
+  const fit_choice_rung *r = fit_choice_rungs(&choice->count);
+  for (int i = 0; i < choice->count; ++i) {
+    choice->candidate[i].model = r[i].model;
+    choice->candidate[i].physical = r[i].physical;
+  }
   candidate_work work = {capture, options, train, choice, threads >= 2};
   if (first->progress)
-    first->progress(first->progress_user, "choosing the model", 0, CF_MODEL_COUNT);
-  cf_parallel_for(CF_MODEL_COUNT, threads, fit_candidate, &work);
+    first->progress(first->progress_user, "choosing the model", 0, (size_t)choice->count);
+  cf_parallel_for(choice->count, threads, fit_candidate, &work);
   if (first->progress)
-    first->progress(first->progress_user, "choosing the model", CF_MODEL_COUNT, CF_MODEL_COUNT);
-  choice->count = CF_MODEL_COUNT;
+    first->progress(first->progress_user, "choosing the model", (size_t)choice->count,
+                    (size_t)choice->count);
 }
 
 /* One candidate's scores on the training and held-out parts. */
@@ -119,27 +136,28 @@ typedef struct score_work {
   const cf_capture *capture;
   const fit_population *train, *test;
   cf_fit_choice *choice;
-  cf_fit_options options; /* the loss of the scores */
-  cf_status status[CF_MODEL_COUNT];
-  cf_error err[CF_MODEL_COUNT];
+  cf_fit_options train_options; /* BIC: the fits' own loss */
+  cf_fit_options test_options;  /* held out: no robust loss */
+  cf_status status[CF_FIT_MAX_CANDIDATES];
+  cf_error err[CF_FIT_MAX_CANDIDATES];
 } score_work;
 
-static void score_candidate(void *user, int m) {
+static void score_candidate(void *user, int i) {
   score_work *w = user;
-  cf_fit_candidate *c = &w->choice->candidate[m];
-  cf_error *err = &w->err[m];
-  w->status[m] = CF_OK;
+  cf_fit_candidate *c = &w->choice->candidate[i];
+  cf_error *err = &w->err[i];
+  w->status[i] = CF_OK;
   if (!c->ok) return; /* not a candidate: nothing to score */
   double train_cost, test_cost, train_log_sigma, test_log_sigma;
   cf_fit_result on_train, on_test;
-  cf_status s = fit_score_at(w->capture, w->train, &c->fit, w->choice->sigma, &w->options,
+  cf_status s = fit_score_at(w->capture, w->train, &c->fit, w->choice->sigma, &w->train_options,
                              &train_cost, &train_log_sigma, &on_train, err);
   if (s == CF_OK) {
     cf_fit_result_free(&on_train);
-    s = fit_score_at(w->capture, w->test, &c->fit, w->choice->sigma, &w->options, &test_cost,
+    s = fit_score_at(w->capture, w->test, &c->fit, w->choice->sigma, &w->test_options, &test_cost,
                      &test_log_sigma, &on_test, err);
   }
-  w->status[m] = s;
+  w->status[i] = s;
   if (s != CF_OK) return;
   size_t train_n = on_train.residuals + on_train.censored;
   c->heldout_residuals = on_test.residuals + on_test.censored;
@@ -160,15 +178,17 @@ static void score_candidate(void *user, int m) {
   cf_fit_result_free(&on_test);
 }
 
-/* BIC and the held-out scores at the common σ, the candidates side by
- * side; the first failure in ladder order is the one reported. */
+/* BIC (the fits' own loss: what they minimised) and the held-out RMS
+ * (no robust loss: what they predict) at the common σ, the candidates
+ * side by side; the first failure in ladder order is the
+ * one reported. */
 static cf_status score_candidates(const cf_capture *capture, const fit_population *train,
                                   const fit_population *test, int threads, cf_fit_choice *choice,
                                   cf_error *err) {
   int has_noise = fit_capture_has_noise(capture);
   choice->sigma = 0.0;
-  for (int m = 0; m < choice->count && !has_noise; ++m) {
-    const cf_fit_candidate *c = &choice->candidate[m];
+  for (int i = 0; i < choice->count && !has_noise; ++i) {
+    const cf_fit_candidate *c = &choice->candidate[i];
     if (c->ok && c->fit.sigma > 0.0 && (choice->sigma == 0.0 || c->fit.sigma < choice->sigma))
       choice->sigma = c->fit.sigma;
   }
@@ -180,53 +200,157 @@ static cf_status score_candidates(const cf_capture *capture, const fit_populatio
   w->train = train;
   w->test = test;
   w->choice = choice;
-  cf_fit_default_options(&w->options, CF_MODEL_LAMBERT);
-  w->options.loss = choice->loss;
-  w->options.loss_scale = choice->loss_scale;
-  w->options.threads = threads >= 2 ? 1 : threads; /* each candidate on one thread */
+  cf_fit_default_options(&w->train_options, CF_MODEL_LAMBERT);
+  w->train_options.loss = choice->loss;
+  w->train_options.loss_scale = choice->loss_scale;
+  w->train_options.threads = threads >= 2 ? 1 : threads; /* each candidate on one thread */
+  w->test_options = w->train_options;
+  w->test_options.loss = CF_LOSS_NONE;
   cf_parallel_for(choice->count, threads, score_candidate, w);
   cf_status s = CF_OK;
-  for (int m = 0; m < choice->count && s == CF_OK; ++m)
-    if (w->status[m] != CF_OK) {
-      s = w->status[m];
-      *err = w->err[m];
+  for (int i = 0; i < choice->count && s == CF_OK; ++i)
+    if (w->status[i] != CF_OK) {
+      s = w->status[i];
+      *err = w->err[i];
     }
   free(w);
   return s;
 }
 
-/* Up the ladder: a richer model replaces the choice only when clearly
+/* ---- the decision ---- */
+
+static const char *code_of(const cf_fit_candidate *c) {
+  return cf_model_info_get(c->model)->code;
+}
+
+/* 1. Up the ladder: a richer model replaces the choice only when clearly
  * better on both scores. */
-static void walk_ladder(cf_fit_choice *choice) {
+static int walk_ladder(cf_fit_choice *choice) {
   int best = -1;
-  for (int m = 0; m < choice->count; ++m) {
-    cf_fit_candidate *c = &choice->candidate[m];
+  for (int i = 0; i < choice->count; ++i) {
+    cf_fit_candidate *c = &choice->candidate[i];
     if (!c->ok) continue;
     if (best < 0) {
-      best = m;
+      best = i;
       snprintf(c->note, sizeof c->note, "the simplest model that could be fitted");
       continue;
     }
     const cf_fit_candidate *b = &choice->candidate[best];
-    const char *code = cf_model_info_get(b->model)->code;
     double dbic = b->bic - c->bic;
     double gain = 1.0 - c->heldout_score / b->heldout_score;
-    int better_bic = dbic > choice->bic_margin;
-    int better_test = gain > choice->heldout_margin;
-    if (better_bic && better_test) {
+    if (dbic > choice->bic_margin && gain > choice->heldout_margin) {
       snprintf(c->note, sizeof c->note,
-               "clearly better than %s: BIC lower by %.4g, held-out error lower by %.3g %%", code,
-               dbic, 100.0 * gain);
-      best = m;
+               "clearly better than %s: BIC lower by %.4g, held-out error lower by %.3g %%",
+               code_of(b), dbic, 100.0 * gain);
+      best = i;
     } else {
       snprintf(c->note, sizeof c->note,
                "not clearly better than %s: BIC lower by %.4g (needs > %g), held-out error lower "
                "by %.3g %% (needs > %g %%)",
-               code, dbic, choice->bic_margin, 100.0 * gain, 100.0 * choice->heldout_margin);
+               code_of(b), dbic, choice->bic_margin, 100.0 * gain, 100.0 * choice->heldout_margin);
     }
   }
-  choice->chosen = (cf_model_id)best;
-  choice->candidate[best].chosen = 1;
+  return best;
+}
+
+/* 2. The guard: never a held-out error more than heldout_guard above the
+ * lowest, unless the BIC says so. */
+static int guard_heldout(cf_fit_choice *choice, int best) {
+  double lowest = INFINITY;
+  for (int i = 0; i < choice->count; ++i)
+    if (choice->candidate[i].ok && choice->candidate[i].heldout_score < lowest)
+      lowest = choice->candidate[i].heldout_score;
+  cf_fit_candidate *b = &choice->candidate[best];
+  double limit = (1.0 + choice->heldout_guard) * lowest;
+  if (!(b->heldout_score > limit)) return best;
+  int a = 0; /* the simplest within the guard (the lowest is) */
+  while (!choice->candidate[a].ok || !(choice->candidate[a].heldout_score <= limit)) ++a;
+  cf_fit_candidate *c = &choice->candidate[a];
+  double above = 100.0 * (b->heldout_score / c->heldout_score - 1.0);
+  double dbic = c->bic - b->bic;
+  char walk[320]; /* the walk's note of the one that loses */
+  if (dbic > choice->bic_margin) {
+    snprintf(walk, sizeof walk, "%s", b->note);
+    snprintf(b->note, sizeof b->note,
+             "kept although its held-out error is %.3g %% above %s's (more than %g %%): its BIC "
+             "is lower by %.4g (more than %g: strong evidence from the training part); %.120s",
+             above, code_of(c), 100.0 * choice->heldout_guard, dbic, choice->bic_margin, walk);
+    return best;
+  }
+  snprintf(walk, sizeof walk, "%s", c->note);
+  snprintf(c->note, sizeof c->note,
+           "chosen over %s, whose held-out error is %.3g %% above this one's (more than %g %%) "
+           "and whose BIC is not lower by more than %g (by %.4g); %.120s",
+           code_of(b), above, 100.0 * choice->heldout_guard, choice->bic_margin, dbic, walk);
+  return a;
+}
+
+int fit_choice_stacked_lobes(const cf_fit_result *fit, char *why, size_t size) {
+  int rough, f0;
+  const cf_param_info *info;
+  cf_error ignored = {0};
+  if (cf_model_param_find(fit->model, "film_roughness", &rough, &info, &ignored) != CF_OK ||
+      cf_model_param_find(fit->model, "film_f0", &f0, &info, &ignored) != CF_OK)
+    return 0;
+  int held = fit->status[f0] == CF_PARAM_HELD || fit->status[f0] == CF_PARAM_HELD_FOR_SCALE;
+  int too_rough = fit->params[rough] > CF_FIT_FILM_MAX_ROUGHNESS;
+  int too_bright = !held && fit->params[f0] > CF_FIT_FILM_MAX_F0;
+  if (why && too_rough && too_bright)
+    snprintf(why, size, "film roughness %.3g > %g and film F0 %.3g > %g", fit->params[rough],
+             CF_FIT_FILM_MAX_ROUGHNESS, fit->params[f0], CF_FIT_FILM_MAX_F0);
+  else if (why && too_rough)
+    snprintf(why, size, "film roughness %.3g > %g (no liquid film is that rough)",
+             fit->params[rough], CF_FIT_FILM_MAX_ROUGHNESS);
+  else if (why && too_bright)
+    snprintf(why, size, "film F0 %.3g > %g (water 0.02, oil 0.035)", fit->params[f0],
+             CF_FIT_FILM_MAX_F0);
+  return too_rough || too_bright;
+}
+
+/* 3. A model whose film is a second lobe gives way to the simpler
+ * physical reading (the first candidate marked so) when that one does as
+ * well within the margins. */
+static int prefer_physical(cf_fit_choice *choice, int best) {
+  cf_fit_candidate *b = &choice->candidate[best];
+  char why[160];
+  if (!fit_choice_stacked_lobes(&b->fit, why, sizeof why)) return best;
+  for (int i = 0; i < choice->count; ++i) {
+    cf_fit_candidate *c = &choice->candidate[i];
+    if (i == best || !c->ok || !c->physical) continue;
+    double above = c->heldout_score / b->heldout_score - 1.0, dbic = c->bic - b->bic;
+    if (above > choice->heldout_margin || dbic > choice->bic_margin) continue;
+    snprintf(c->note, sizeof c->note,
+             "the simpler physical reading: %s's film is a second lobe (%s), and this does as "
+             "well within the margins (held-out error %+.3g %%, BIC %+.4g)",
+             code_of(b), why, 100.0 * above, dbic);
+    return i;
+  }
+  return best;
+}
+
+void fit_choice_decide(cf_fit_choice *choice) {
+  int best = walk_ladder(choice);
+  if (best < 0) return;
+  best = guard_heldout(choice, best);
+  best = prefer_physical(choice, best);
+  for (int i = 0; i < choice->count; ++i) choice->candidate[i].chosen = i == best;
+  choice->chosen = choice->candidate[best].model;
+}
+
+const cf_fit_candidate *cf_fit_choice_chosen(const cf_fit_choice *choice) {
+  for (int i = 0; i < choice->count; ++i)
+    if (choice->candidate[i].chosen) return &choice->candidate[i];
+  return NULL;
+}
+
+/* What the chosen fit's parameters mean where not what they are named
+ * after (rule 3's output). */
+static void state_reading(cf_fit_choice *choice, const cf_fit_result *result) {
+  char why[160];
+  if (!fit_choice_stacked_lobes(result, why, sizeof why)) return;
+  const char *code = cf_model_info_get(result->model)->code;
+  snprintf(choice->reading, sizeof choice->reading,
+           "%s's film parameters describe a second specular lobe, not a film: %s", code, why);
 }
 
 cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
@@ -236,6 +360,7 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   choice->automatic = 1;
   choice->bic_margin = CF_FIT_CHOICE_BIC_MARGIN;
   choice->heldout_margin = CF_FIT_CHOICE_HELDOUT_MARGIN;
+  choice->heldout_guard = CF_FIT_CHOICE_HELDOUT_GUARD;
   choice->loss = options[0].loss;
   choice->loss_scale = options[0].loss_scale;
   if (cf_capture_observations(capture)->count == 0)
@@ -258,15 +383,15 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
     fit_candidates(capture, options, &train, choice);
     s = score_candidates(capture, &train, &test, fit_threads(&options[0]), choice, err);
   }
-  if (s == CF_OK) walk_ladder(choice);
+  if (s == CF_OK) fit_choice_decide(choice);
   split_free(&split);
   choice->seconds = cf_now_seconds() - clock;
   if (s != CF_OK) return s;
 
   /* the chosen model on every observation, from its candidate fit */
-  const cf_fit_candidate *c = &choice->candidate[choice->chosen];
-  cf_fit_options o = options[choice->chosen];
-  o.model = choice->chosen;
+  const cf_fit_candidate *c = cf_fit_choice_chosen(choice);
+  cf_fit_options o = options[c->model];
+  o.model = c->model;
   o.use_start = 1;
   memcpy(o.start, c->fit.params, sizeof o.start);
   o.start_scale = c->fit.scale;
@@ -283,11 +408,12 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
       dup |= !strcmp(result->warnings[j], c->fit.warnings[i]);
     if (!dup) fit_add_warning(result, "%s", c->fit.warnings[i]);
   }
+  state_reading(choice, result);
   return CF_OK;
 }
 
 void cf_fit_choice_free(cf_fit_choice *choice) {
-  for (int m = 0; m < choice->count; ++m)
-    if (choice->candidate[m].ok) cf_fit_result_free(&choice->candidate[m].fit);
+  for (int i = 0; i < choice->count; ++i)
+    if (choice->candidate[i].ok) cf_fit_result_free(&choice->candidate[i].fit);
   choice->count = 0;
 }

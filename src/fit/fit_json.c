@@ -156,20 +156,28 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
     }
     json_array_append_new(candidates, entry);
   }
-  return json_pack(
-      "{s:s, s:s, s:I, s:I, s:s, s:f, s:{s:s, s:f}, s:f, s:f, s:f, s:s, s:o}", "mode", "auto",
-      "chosen", cf_model_info_get(choice->chosen)->code, "train_observations",
+  json_t *out = json_pack(
+      "{s:s, s:s, s:I, s:I, s:s, s:f, s:{s:s, s:f}, s:f, s:f, s:f, s:f, s:s, s:o}", "mode",
+      "auto", "chosen", cf_model_info_get(choice->chosen)->code, "train_observations",
       (json_int_t)choice->train_observations, "heldout_observations",
       (json_int_t)choice->heldout_observations, "heldout", choice->heldout, "sigma", choice->sigma,
       "loss", "type", loss_names[choice->loss], "scale_sigma", choice->loss_scale, "bic_margin",
-      choice->bic_margin, "heldout_margin", choice->heldout_margin, "seconds", choice->seconds,
-      "rule",
+      choice->bic_margin, "heldout_margin", choice->heldout_margin, "heldout_guard",
+      choice->heldout_guard, "seconds", choice->seconds, "rule",
       "each model fitted to the training part; BIC = 2 cost + unknowns ln(residuals) there, "
-      "cost = 1/2 sum rho(r^2) at the common sigma; heldout_score = sqrt(mean rho(r^2)) on the "
-      "held-out part, in sigma; going up the ladder a richer model replaces the choice only "
+      "cost = 1/2 sum rho(r^2) at the common sigma (the fits' loss); heldout_score = "
+      "sqrt(mean r^2) on the held-out part, in sigma, without the robust loss (censored "
+      "channels as in the fit); 1. going up the ladder a richer model replaces the choice only "
       "when its BIC is lower by more than bic_margin and its held-out score lower by more than "
-      "heldout_margin (relative)",
+      "heldout_margin (relative); 2. a choice whose held-out score is more than heldout_guard "
+      "(relative) above the lowest gives way to the simplest candidate within heldout_guard of "
+      "the lowest, unless its BIC is lower than that one's by more than bic_margin; 3. a choice "
+      "whose film is a second lobe gives way to a candidate that is the simpler physical "
+      "reading when that one does as well within the margins; the chosen candidate's note "
+      "says why",
       "candidates", candidates);
+  if (choice->reading[0]) json_object_set_new(out, "reading", json_string(choice->reading));
+  return out;
 }
 
 /* How the pixel footprints were integrated (cf_fit_options.footprint). */
@@ -310,6 +318,8 @@ static json_t *jpeg_coding_json(const cf_fit_result *r) {
 static void add_later_sections(json_t *doc, const cf_fit_report *rep,
                                const cf_capture_summary *summary) {
   const cf_fit_result *r = rep->result;
+  /* the formulas the values belong to (docs/model.md, top) */
+  json_object_set_new(doc, "model_version", json_integer(CF_MODEL_VERSION));
   if (summary->radiometry_from_reference) /* the capture's scale from its reference */
     json_object_set_new(
         json_object_get(doc, "capture"), "reference",

@@ -4,6 +4,7 @@
  * reader, every object for unknown keys, and every error names the file and
  * JSON path. */
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -885,8 +886,10 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
                                       "loss",
                                       "bic_margin",
                                       "heldout_margin",
+                                      "heldout_guard",
                                       "seconds",
                                       "rule",
+                                      "reading",
                                       "candidates",
                                       NULL};
   TRY(json_check_keys(obj, &here, known, err));
@@ -903,8 +906,11 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
   TRY(read_loss(loss, &lh, NULL, 0, &x, err));
   TRY(json_get_number(obj, &here, "bic_margin", 1, -HUGE_NUMBER, HUGE_NUMBER, &x, NULL, err));
   TRY(json_get_number(obj, &here, "heldout_margin", 1, -HUGE_NUMBER, HUGE_NUMBER, &x, NULL, err));
+  /* (the guard and the reading since issue 18: optional in older files) */
+  TRY(json_get_number(obj, &here, "heldout_guard", 0, -HUGE_NUMBER, HUGE_NUMBER, &x, NULL, err));
   TRY(get_nonneg(obj, &here, "seconds", &x, err));
   TRY(json_get_string(obj, &here, "rule", 1, &text, NULL, err));
+  TRY(json_get_string(obj, &here, "reading", 0, &text, NULL, err));
   n = json_array_size(candidates);
   if (n < 1 || n > CF_MODEL_COUNT)
     return json_fail(&ch, err, CF_EPARSE, "expected 1 to %d candidates, got %zu", CF_MODEL_COUNT,
@@ -916,10 +922,27 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
   return CF_OK;
 }
 
+/* model_version: absent in files written before it existed (version 1,
+ * Schlick's Fresnel); a version this clayfit does not know is refused. */
+static cf_status read_model_version(const json_t *root, const json_at *at, const char *path,
+                                    int *version, cf_error *err) {
+  long long v = 1;
+  int found = 0;
+  TRY(json_get_integer(root, at, "model_version", 0, LLONG_MIN, LLONG_MAX, &v, &found, err));
+  if (found && (v < 1 || v > CF_MODEL_VERSION))
+    return cf_error_set(err, CF_EPARSE,
+                        "%s: model_version: unknown model version %lld (this clayfit knows "
+                        "versions 1 to %d; was the file written by a newer clayfit?)",
+                        path, v, CF_MODEL_VERSION);
+  *version = (int)v;
+  return CF_OK;
+}
+
 static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f, cf_error *err) {
   json_at at = {path, NULL, NULL, 0};
   static const char *const known[] = {"clayfit_fit",
                                       "clayfit_version",
+                                      "model_version",
                                       "created",
                                       "capture",
                                       "model",
@@ -949,6 +972,7 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
   long long layout;
   TRY(json_get_integer(root, &at, "clayfit_fit", 1, 1, 1, &layout, NULL, err));
   TRY(get_text(root, &at, "clayfit_version", f->clayfit_version, sizeof f->clayfit_version, err));
+  TRY(read_model_version(root, &at, path, &f->model_version, err));
   TRY(get_text(root, &at, "created", f->created, sizeof f->created, err));
   TRY(read_capture(root, &at, path, f, err));
   cf_fit_result *r = &f->result;
@@ -972,6 +996,13 @@ static cf_status read_root(const json_t *root, const char *path, cf_fit_file *f,
   TRY(read_sample(root, &at, r, err));
   TRY(read_jpeg_coding(root, &at, r, err));
   return read_response(root, &at, r, err);
+}
+
+const char *cf_fit_file_version_warning(const cf_fit_file *file) {
+  if (file->model_version >= CF_MODEL_VERSION) return NULL;
+  return "the values were fitted with model version 1 (Schlick's Fresnel); this clayfit "
+         "evaluates them with version 2's exact dielectric Fresnel (docs/model.md), which "
+         "differs at grazing angles: refit for exact values";
 }
 
 cf_status cf_fit_file_read(const char *path, cf_fit_file *file, cf_error *err) {

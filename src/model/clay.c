@@ -4,6 +4,7 @@
  *   f = S(F0_1, r1; l, v) + T(c_i) T(c_o) a f_base / η1²
  *   f_base = S(F0_2, r2; l', v') + K (1 − F(F0_2, c_i'))(1 − F(F0_2, c_o')) ON(ρ, σ; l', v')
  *
+ * F is the exact dielectric Fresnel (8) at both interfaces (model version 2).
  * Every quantity of the film depends on F0_1 through η1; derivatives with
  * respect to F0_1 are written d_<name> (∂<name>/∂F0_1) and chained by hand.
  *
@@ -27,7 +28,7 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
   p->a2_2 = (r2 * r2) * (r2 * r2);
   p->inv_a2_2 = 1.0 / p->a2_2;
   p->da2_2 = 4.0 * r2 * r2 * r2;
-  p->f0_2 = params[CF_CLAY_BASE_F0];
+  p->eta_2 = fresnel_eta(params[CF_CLAY_BASE_F0]);
 
   /* step 1: η1 = (1 + √F0_1)/(1 − √F0_1), in s = √F0_1 (ds/dF0_1 = 1/(2s);
    * F0_1 >= 0.01 keeps s >= 0.1) */
@@ -35,18 +36,19 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
   double s = sqrt(f0_1);
   double ds = 0.5 / s;
   double one_p = 1.0 + s, one_m = 1.0 - s;
-  p->f0_1 = f0_1;
+  p->eta_1 = fresnel_eta(f0_1);
   p->inv_eta = one_m / one_p;
   p->d_inv_eta = -2.0 / (one_p * one_p) * ds;
   p->inv_eta2 = p->inv_eta * p->inv_eta;
   p->d_inv_eta2 = 2.0 * p->inv_eta * p->d_inv_eta;
-  p->eta2_m1 = 4.0 * s / (one_m * one_m);
-  p->d_eta2_m1 = 4.0 * one_p / (one_m * one_m * one_m) * ds;
 
-  /* step 6: F̄_i = 1 − (1 − F̄_e)/η1², F̄_e = F0_1 + (1 − F0_1)/21, so
-   * (1 − F̄_e)/η1² = (20/21)(1 − s)³/(1 + s); K = 1/(1 − ρ F̄_i e^{−4τ}) */
-  double fbar_i = 1.0 - (20.0 / 21.0) * one_m * one_m * one_m / one_p;
-  double d_fbar_i = (20.0 / 21.0) * one_m * one_m * (4.0 + 2.0 * s) / (one_p * one_p) * ds;
+  /* step 6: F̄_i = 1 − (1 − F̄_e)/η1², F̄_e the exact Fresnel's hemispherical
+   * mean (closed form, terms.h); ∂η1/∂F0_1 = 2/(1 − s)² ds;
+   * K = 1/(1 − ρ F̄_i e^{−4τ}) */
+  cf_fresnel_mean fbar_e = fresnel_dielectric_mean(one_p / one_m);
+  double d_fbar_e = fbar_e.d_eta * 2.0 / (one_m * one_m) * ds;
+  double fbar_i = 1.0 - (1.0 - fbar_e.value) * p->inv_eta2;
+  double d_fbar_i = d_fbar_e * p->inv_eta2 - (1.0 - fbar_e.value) * p->d_inv_eta2;
   for (int c = 0; c < 3; ++c) {
     double rho = params[CF_CLAY_ALBEDO + c];
     double tau = params[CF_CLAY_OPTICAL_DEPTH + c];
@@ -64,18 +66,20 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
 /* Steps 2 and 5: refracted cosine c' = sqrt((η1² − 1) + c²)/η1, without
  * the cancellation of sqrt(1 − (1 − c²)/η1²), its reciprocal (the path
  * length in the film) and its ∂/∂F0_1. With ρ = sqrt(η1² − 1 + c²),
- * c' = ρ/η1, 1/ρ = (1/η1)/c'. */
+ * c' = ρ/η1, 1/ρ = (1/η1)/c'. ρ is also the g of the film's Fresnel at c
+ * (terms.h), kept as `root`. */
 typedef struct refracted_cos {
-  double c, inv_c, d_c;
+  double c, inv_c, d_c, root;
 } refracted_cos;
 
 static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
   refracted_cos r;
-  double root = sqrt(p->eta2_m1 + c * c);
+  double root = fresnel_root(&p->eta_1, c);
+  r.root = root;
   r.c = root * p->inv_eta;
   r.inv_c = 1.0 / r.c;
   double inv_root = p->inv_eta * r.inv_c;
-  r.d_c = 0.5 * p->inv_eta * p->d_eta2_m1 * inv_root + root * p->d_inv_eta;
+  r.d_c = 0.5 * p->inv_eta * p->eta_1.du * inv_root + root * p->d_inv_eta;
   return r;
 }
 
@@ -84,19 +88,19 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
-  double weight_d = g->weight_d;
-  double fresnel_1 = fresnel_schlick(p->f0_1, weight_d);
+  cf_fresnel fresnel_1 = fresnel_dielectric(&p->eta_1, g->c_d, fresnel_root(&p->eta_1, g->c_d));
   cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h);
   cf_smith_v v1 = smith_ggx_v(p->a2_1, c_i, c_o);
-  double top = fresnel_1 * d1.value * v1.value;
-
-  /* step 4: T(c_i) T(c_o), T(c) = (1 − F0_1)(1 − (1 − c)^5) */
-  double w = g->transmission;
-  double one_minus_f0_1 = 1.0 - p->f0_1;
-  double transmission = one_minus_f0_1 * one_minus_f0_1 * w;
+  double top = fresnel_1.value * d1.value * v1.value;
 
   /* steps 2-3: the refracted pair's invariants */
   refracted_cos ri = refract_cos(p, c_i), ro = refract_cos(p, c_o);
+
+  /* step 4: T(c_i) T(c_o), T(c) = 1 − F(F0_1, c), g the refraction's root */
+  cf_fresnel f1_i = fresnel_dielectric(&p->eta_1, c_i, ri.root);
+  cf_fresnel f1_o = fresnel_dielectric(&p->eta_1, c_o, ro.root);
+  double t1_i = f1_i.transmission, t1_o = f1_o.transmission;
+  double transmission = t1_i * t1_o;
   double t_sq_b = g->t_sq * p->inv_eta2;
   double g_b = g->g * p->inv_eta2;
   cf_half_vector hb = half_vector(t_sq_b, ri.c + ro.c);
@@ -105,15 +109,15 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double path = ri.inv_c + ro.inv_c;
 
   /* step 7: the base's specular and diffuse lobes, in the film */
-  double weight_db = schlick_weight(hb.c_d);
-  double fresnel_2 = fresnel_schlick(p->f0_2, weight_db);
+  const cf_fresnel_eta *e2 = &p->eta_2;
+  cf_fresnel fresnel_2 = fresnel_dielectric(e2, hb.c_d, fresnel_root(e2, hb.c_d));
   cf_ggx_d d2 = ggx_d(p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h);
   cf_smith_v v2 = smith_ggx_v(p->a2_2, ri.c, ro.c);
-  double base_specular = fresnel_2 * d2.value * v2.value;
-  double one_minus_f0_2 = 1.0 - p->f0_2;
-  double weight_ib = schlick_weight(ri.c), weight_ob = schlick_weight(ro.c);
-  double w_b = (1.0 - weight_ib) * (1.0 - weight_ob);
-  double transmission_b = one_minus_f0_2 * one_minus_f0_2 * w_b;
+  double base_specular = fresnel_2.value * d2.value * v2.value;
+  cf_fresnel f2_i = fresnel_dielectric(e2, ri.c, fresnel_root(e2, ri.c));
+  cf_fresnel f2_o = fresnel_dielectric(e2, ro.c, fresnel_root(e2, ro.c));
+  double t2_i = f2_i.transmission, t2_o = f2_o.transmission;
+  double transmission_b = t2_i * t2_o;
   const refracted_cos *larger = ri.c > ro.c ? &ri : &ro; /* max(c_i', c_o') */
   double x = g_b > 0.0 ? g_b * larger->inv_c : 0.0;      /* ON's angular factor */
   double on = (p->on.a + p->on.b * x) * CF_INV_PI;       /* ON / ρ */
@@ -141,9 +145,9 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
 
   /* ---- derivatives ---- */
   /* top lobe */
-  double dtop_dr1 = fresnel_1 * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
-  double dtop_df0_1 = (1.0 - weight_d) * d1.value * v1.value;
-  double dtransmission = -2.0 * one_minus_f0_1 * w;
+  double dtop_dr1 = fresnel_1.value * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
+  double dtop_df0_1 = fresnel_1.d_f0 * d1.value * v1.value;
+  double dtransmission = -(f1_i.d_f0 * t1_o + t1_i * f1_o.d_f0);
 
   /* ∂/∂F0_1 of the refracted invariants */
   double d_path = -ri.d_c * ri.inv_c * ri.inv_c - ro.d_c * ro.inv_c * ro.inv_c;
@@ -156,18 +160,15 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double d_c_d_b = 0.5 * d_s_sq_b * hb.c_d * hb.inv_s_sq;
 
   /* base specular: through F(c_d'), D(sin²θ_h') and V(c_i', c_o') */
-  double dbase_spec_df0_1 =
-      (1.0 - p->f0_2) * schlick_weight_dc(hb.c_d) * d_c_d_b * d2.value * v2.value +
-      fresnel_2 * d2.d_sin2 * d_sin2_b * v2.value +
-      fresnel_2 * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
-  double dbase_spec_dr2 = fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
-  double dbase_spec_df0_2 = (1.0 - weight_db) * d2.value * v2.value;
+  double dbase_spec_df0_1 = fresnel_2.d_c * d_c_d_b * d2.value * v2.value +
+                            fresnel_2.value * d2.d_sin2 * d_sin2_b * v2.value +
+                            fresnel_2.value * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
+  double dbase_spec_dr2 = fresnel_2.value * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
+  double dbase_spec_df0_2 = fresnel_2.d_f0 * d2.value * v2.value;
 
   /* base diffuse: transmissions into the clay, and the angular factor */
-  double dtransmission_b_df0_1 = one_minus_f0_2 * one_minus_f0_2 *
-                                 (-schlick_weight_dc(ri.c) * ri.d_c * (1.0 - weight_ob) -
-                                  (1.0 - weight_ib) * schlick_weight_dc(ro.c) * ro.d_c);
-  double dtransmission_b_df0_2 = -2.0 * one_minus_f0_2 * w_b;
+  double dtransmission_b_df0_1 = -(f2_i.d_c * ri.d_c * t2_o + t2_i * f2_o.d_c * ro.d_c);
+  double dtransmission_b_df0_2 = -(f2_i.d_f0 * t2_o + t2_i * f2_o.d_f0);
   double dx_df0_1 = 0.0;
   if (g_b > 0.0) dx_df0_1 = (d_g_b - g_b * larger->d_c * larger->inv_c) * larger->inv_c;
   double don_df0_1 = p->on.b * dx_df0_1 * CF_INV_PI;

@@ -1,13 +1,14 @@
 /* M2 dielectric (docs/model.md (20), (11)):
  *   f = S(F0, r; l, v) + (1 − F(F0, c_i))(1 − F(F0, c_o)) ON(ρ, σ; l, v),
- *   S = F(F0, c_d) D(r², c_h) V(r²; c_i, c_o). */
+ *   S = F(F0, c_d) D(r², c_h) V(r²; c_i, c_o),
+ * F the exact dielectric Fresnel (8) (model version 2). */
 #include "models.h"
 
 void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p) {
   cf_diffuse_prepare(params + CF_DIELECTRIC_ALBEDO, params[CF_DIELECTRIC_DIFFUSE_ROUGHNESS],
                      &p->diffuse);
   double r = params[CF_DIELECTRIC_ROUGHNESS];
-  p->f0 = params[CF_DIELECTRIC_F0];
+  p->eta = fresnel_eta(params[CF_DIELECTRIC_F0]);
   p->a2 = (r * r) * (r * r);
   p->inv_a2 = 1.0 / p->a2;
   p->da2_dr = 4.0 * r * r * r;
@@ -22,26 +23,29 @@ _Static_assert((int)CF_DIELECTRIC_F0 == (int)CF_CLEARCOAT_F0 &&
 
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim) {
-  /* specular lobe */
-  double fresnel = fresnel_schlick(p->f0, g->weight_d);
+  /* specular lobe, F at c_d */
+  const cf_fresnel_eta *e = &p->eta;
+  cf_fresnel fresnel = fresnel_dielectric(e, g->c_d, fresnel_root(e, g->c_d));
   cf_ggx_d d = ggx_d(p->a2, p->inv_a2, g->sin2_h, g->cos2_h);
   cf_smith_v vis = smith_ggx_v(p->a2, g->cos_i, g->cos_o);
   double dv = d.value * vis.value;
-  double specular = fresnel * dv;
+  double specular = fresnel.value * dv;
 
-  /* diffuse lobe under the interface; each transmission is
-   * 1 − F(F0, c) = (1 − F0)(1 − (1 − c)^5) */
-  double one_minus_f0 = 1.0 - p->f0;
-  double transmission = one_minus_f0 * one_minus_f0 * g->transmission;
+  /* diffuse lobe under the interface: (1 − F(F0, c_i))(1 − F(F0, c_o)),
+   * exactly 1 at F0 = 0 (M2 is then M1 to the bit) */
+  cf_fresnel f_i = fresnel_dielectric(e, g->cos_i, fresnel_root(e, g->cos_i));
+  cf_fresnel f_o = fresnel_dielectric(e, g->cos_o, fresnel_root(e, g->cos_o));
+  double t_i = f_i.transmission, t_o = f_o.transmission;
+  double transmission = t_i * t_o;
   double x = g->on_angular;
   double q = p->diffuse.on.a + p->diffuse.on.b * x;
-  for (int c = 0; c < 3; ++c) f[c] = specular + transmission * p->diffuse.rho_over_pi[c] * q;
+  for (int c = 0; c < 3; ++c) f[c] = specular + transmission * (p->diffuse.rho_over_pi[c] * q);
   if (!grad) return;
 
   cf_zero_other_channels(grad, dim, CF_DIELECTRIC_ALBEDO);
-  double ds_dr = fresnel * (d.d_a2 * vis.value + d.value * vis.d_a2) * p->da2_dr;
-  double ds_df0 = (1.0 - g->weight_d) * dv;
-  double dt_df0 = -2.0 * one_minus_f0 * g->transmission;
+  double ds_dr = fresnel.value * (d.d_a2 * vis.value + d.value * vis.d_a2) * p->da2_dr;
+  double ds_df0 = fresnel.d_f0 * dv;
+  double dt_df0 = -(f_i.d_f0 * t_o + t_i * f_o.d_f0);
   double dq_dsigma = p->diffuse.on.d_a + p->diffuse.on.d_b * x;
   for (int c = 0; c < 3; ++c) {
     double *row = grad + c * dim;

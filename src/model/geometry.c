@@ -25,7 +25,6 @@ cf_geometry cf_geometry_from_directions(const double n[3], const double l[3], co
   g.cos2_h = h.cos2_h;
   g.c_d = h.c_d;
   g.weight_d = schlick_weight(h.c_d);
-  g.transmission = (1.0 - schlick_weight(g.cos_i)) * (1.0 - schlick_weight(g.cos_o));
   g.on_angular = oren_nayar_angular(g.g, g.cos_i, g.cos_o);
   g.coat_visibility = smith_ggx_separable(CF_COAT_VISIBILITY_A2, g.cos_i, g.cos_o);
   return g;

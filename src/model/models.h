@@ -16,7 +16,8 @@ typedef struct cf_diffuse_prep {
 /* M2: the diffuse prep plus the specular interface. */
 typedef struct cf_dielectric_prep {
   cf_diffuse_prep diffuse;
-  double f0, a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
+  cf_fresnel_eta eta;        /* the interface's η² − 1 from F0 (7) */
+  double a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
 } cf_dielectric_prep;
 
 /* M3: M2 plus the coat (a = 0.1 − 0.099 gloss). */
@@ -30,13 +31,14 @@ typedef struct cf_clearcoat_prep {
 typedef struct cf_clay_prep {
   double rho[3];
   cf_oren_nayar_coeffs on;
-  double f0_1, a2_1, inv_a2_1, da2_1; /* top interface */
-  double inv_eta, d_inv_eta;          /* 1/η1 */
-  double inv_eta2, d_inv_eta2;        /* 1/η1² */
-  double eta2_m1, d_eta2_m1;          /* η1² − 1 = 4√F0_1/(1 − √F0_1)² */
+  cf_fresnel_eta eta_1; /* top interface: η1² − 1 from F0_1 */
+  double a2_1, inv_a2_1, da2_1;
+  double inv_eta, d_inv_eta;   /* 1/η1 */
+  double inv_eta2, d_inv_eta2; /* 1/η1² */
   double tau[3];
   double k[3], dk_df0_1[3], dk_dtau[3]; /* recycling K per channel */
-  double f0_2, a2_2, inv_a2_2, da2_2;   /* base interface */
+  cf_fresnel_eta eta_2;                 /* base interface: η2² − 1 from F0_2 */
+  double a2_2, inv_a2_2, da2_2;
 } cf_clay_prep;
 
 typedef union cf_prepared {

@@ -1,6 +1,8 @@
 /* The residual of every observation in units of σ, its marks and its
  * angles (report_internal.h). */
 #include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,6 +64,8 @@ void report_data_free(report_data *d) {
   free(d->first);
   free(d->last);
   free(d->rms_sigma);
+  free(d->rejected_region);
+  free(d->rejected_clustered);
   memset(d, 0, sizeof *d);
 }
 
@@ -78,10 +82,13 @@ static cf_status allocate(report_data *d, cf_error *err) {
   d->rejected = calloc(k, sizeof *d->rejected);
   d->observations = calloc(k, sizeof *d->observations);
   d->rms_sigma = calloc(k, sizeof *d->rms_sigma);
+  d->rejected_region = calloc(k, sizeof *d->rejected_region);
+  d->rejected_clustered = calloc(k, sizeof *d->rejected_clustered);
   d->first = malloc(k * sizeof *d->first);
   d->last = calloc(k, sizeof *d->last);
   if (!d->prediction || !d->sigma || !d->residual || !d->mark || !d->half_angle || !d->view_angle ||
-      !d->censored || !d->rejected || !d->observations || !d->rms_sigma || !d->first || !d->last)
+      !d->censored || !d->rejected || !d->observations || !d->rms_sigma || !d->first || !d->last ||
+      !d->rejected_region || !d->rejected_clustered)
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", d->count);
   return CF_OK;
 }
@@ -129,6 +136,74 @@ static cf_status residuals(report_data *d, cf_error *err) {
   return CF_OK;
 }
 
+/* The size of the largest 8-connected region of the n marked cells of a
+ * w × h grid, and into *clustered the cells in regions of at least
+ * REPORT_CLUSTER_PX (marks cleared on the way); stack holds n cells. */
+static size_t largest_region(uint8_t *grid, size_t w, size_t h, size_t *stack,
+                             size_t *clustered) {
+  size_t best = 0;
+  *clustered = 0;
+  for (size_t start = 0; start < w * h; ++start) {
+    if (!grid[start]) continue;
+    size_t top = 0, size = 0;
+    grid[start] = 0;
+    stack[top++] = start;
+    while (top > 0) {
+      size_t q = stack[--top], x = q % w, y = q / w;
+      ++size;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if ((dx < 0 && x == 0) || (dy < 0 && y == 0) || (dx > 0 && x + 1 == w) ||
+              (dy > 0 && y + 1 == h))
+            continue;
+          size_t n = (size_t)((ptrdiff_t)q + dy * (ptrdiff_t)w + dx);
+          if (grid[n]) grid[n] = 0, stack[top++] = n; /* each cell pushed once */
+        }
+    }
+    if (size > best) best = size;
+    if (size >= REPORT_CLUSTER_PX) *clustered += size;
+  }
+  return best;
+}
+
+/* Per image, the largest 8-connected region of rejected observations in
+ * the pixel grid, over the rejected observations' bounding box. */
+static cf_status rejected_regions(report_data *d, cf_error *err) {
+  const cf_observations *o = d->obs;
+  for (size_t im = 0; im < d->images; ++im) {
+    if (d->rejected[im] == 0) continue;
+    size_t x0 = SIZE_MAX, y0 = SIZE_MAX, x1 = 0, y1 = 0;
+    for (size_t i = d->first[im]; i < d->last[im]; ++i) {
+      if (o->image[i] != im || !(d->mark[i] & REPORT_REJECTED)) continue;
+      size_t x = (size_t)o->pixel[2 * i], y = (size_t)o->pixel[2 * i + 1];
+      x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
+    }
+    size_t w = x1 - x0 + 1, h = y1 - y0 + 1; /* within the image: the capture checked */
+    uint8_t *grid = calloc(w * h, 1);
+    size_t *stack = malloc(d->rejected[im] * sizeof *stack);
+    if (!grid || !stack) {
+      free(grid);
+      free(stack);
+      return cf_error_set(err, CF_ENOMEM, "out of memory for image %zu's rejected regions", im);
+    }
+    for (size_t i = d->first[im]; i < d->last[im]; ++i)
+      if (o->image[i] == im && (d->mark[i] & REPORT_REJECTED))
+        grid[((size_t)o->pixel[2 * i + 1] - y0) * w + ((size_t)o->pixel[2 * i] - x0)] = 1;
+    d->rejected_region[im] = largest_region(grid, w, h, stack, &d->rejected_clustered[im]);
+    free(grid);
+    free(stack);
+  }
+  return CF_OK;
+}
+
+double report_rejected_share(const report_data *d, int clustered) {
+  size_t rejected = 0, part = 0;
+  for (size_t im = 0; im < d->images; ++im)
+    rejected += d->rejected[im],
+        part += clustered ? d->rejected_clustered[im] : d->rejected_region[im];
+  return rejected ? (double)part / (double)rejected : NAN;
+}
+
 cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_fit_file *fit,
                             const char *fit_path, cf_error *err) {
   memset(d, 0, sizeof *d);
@@ -159,6 +234,7 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
     return s;
   }
   s = residuals(d, err);
+  if (s == CF_OK) s = rejected_regions(d, err);
   if (s != CF_OK) report_data_free(d);
   return s;
 }

@@ -126,6 +126,15 @@ static void residual_summary(FILE *f, const report_data *d) {
             "%%; elsewhere: %.4g %%.",
             number_at(cores, "radius_px"), 100.0 * number_at(cores, "relative_rmse"),
             100.0 * number_at(json_object_get(cores, "rest"), "relative_rmse"));
+  double share = report_rejected_share(d, 0), clustered = report_rejected_share(d, 1);
+  if (isfinite(share))
+    fprintf(f,
+            " %.3g %% of the observations beyond the robust loss's scale (green in the maps) lie "
+            "in one connected region per image (its largest, 8-connected), %.3g %% in regions of "
+            "%d pixels or more: %s.",
+            100.0 * share, 100.0 * clustered, REPORT_CLUSTER_PX,
+            clustered >= REPORT_SYSTEMATIC_SHARE ? "a systematic misfit, not outliers"
+                                                 : "scattered, outliers rather than a misfit");
   fputs("</p>\n", f);
 }
 
@@ -220,10 +229,18 @@ static void choice_table(FILE *f, const report_data *d) {
       fputs("; ", f);
     }
     fputs("</td><td class=\"l\">", f);
-    html(f, json_is_true(json_object_get(c, "chosen")) ? "chosen" : string_at(c, "note"));
+    if (json_is_true(json_object_get(c, "chosen"))) fputs("chosen: ", f);
+    html(f, string_at(c, "note"));
     fputs("</td></tr>\n", f);
   }
   fputs("</table>\n", f);
+  /* what the chosen model's parameters mean (an M4 whose film is a lobe) */
+  const char *reading = json_string_value(json_object_get(choice, "reading"));
+  if (reading) {
+    fputs("<p>Meaning: ", f);
+    html(f, reading);
+    fputs(".</p>\n", f);
+  }
 }
 
 static void plots_and_speed(FILE *f, const report_data *d) {
@@ -317,9 +334,10 @@ static void image_rows(FILE *f, const report_data *d, char (*files)[3][64]) {
     html(f, im->name);
     fprintf(f,
             "<br>%zu observations, relative RMSE %.3g %%, RMS %.3g &sigma;<br>%zu censored, "
-            "%zu beyond the loss, %zu left out (not radiance)</div>\n",
+            "%zu beyond the loss (%zu in its largest region), %zu left out (not radiance)</div>\n",
             d->observations[k], r->image_relative_rmse ? 100.0 * r->image_relative_rmse[k] : NAN,
-            d->rms_sigma[k], d->censored[k], d->rejected[k], im->not_radiance);
+            d->rms_sigma[k], d->censored[k], d->rejected[k], d->rejected_region[k],
+            im->not_radiance);
   }
   fputs("</div>\n", f);
 }

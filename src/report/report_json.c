@@ -47,10 +47,11 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
     const cf_capture_image *im = cf_capture_image_at(d->capture, k);
     json_array_append_new(
         images,
-        json_pack("{s:o, s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:f, s:o, s:o}", "name",
+        json_pack("{s:o, s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:I, s:f, s:o, s:o}", "name",
                   json_text(im->name), "photo", image_files[k][0], "render", image_files[k][1],
                   "residual", image_files[k][2], "observations", (json_int_t)d->observations[k],
                   "censored", (json_int_t)d->censored[k], "rejected", (json_int_t)d->rejected[k],
+                  "rejected_largest_region", (json_int_t)d->rejected_region[k],
                   "not_radiance", (json_int_t)im->not_radiance, "rms_sigma", d->rms_sigma[k],
                   "rmse", json_real_or_null(r->image_rmse ? r->image_rmse[k] : NAN),
                   "relative_rmse",
@@ -79,6 +80,10 @@ cf_status report_write_json(const report_data *d, const char *dir, const char *f
       "loss_scale_sigma", isfinite(d->loss_scale) ? d->loss_scale : 0.0, "images", images, "plots",
       plots);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "could not build report.json");
+  json_object_set_new(json_object_get(doc, "residuals"), "rejected_largest_region_share",
+                      json_real_or_null(report_rejected_share(d, 0)));
+  json_object_set_new(json_object_get(doc, "residuals"), "rejected_clustered_share",
+                      json_real_or_null(report_rejected_share(d, 1)));
   json_t *capture = json_object_get(doc, "capture");
   if (strcmp(d->capture_path, d->fit->capture_path) != 0)
     json_object_set_new(capture, "fit_capture", json_text(d->fit->capture_path));

@@ -1,6 +1,10 @@
 # Reading fit.json back, and the material presets (clayfit export).
 clayfit_c_test(test_fit_read SOURCES export/test_fit_read.c LIBS clayfit_fit_test_support
                LABELS "fit;export")
+# The GGX that best reproduces a tailed (STD) lobe, for the GGX-only formats
+# (docs/presets.md, "Tailed lobes in GGX-only formats").
+clayfit_c_test(test_tailed_ggx SOURCES export/test_tailed_ggx.c LIBS clayfit_export
+               LABELS export)
 
 # One fit.json per model (tests/export/make_fits.py: schema-valid, written
 # without fitting), each exported to every format and the file validated by
@@ -60,8 +64,18 @@ clayfit_cli_test(error_export_no_format --exit 2 --stderr "expected FIT.json --f
 clayfit_cli_test(error_eval_bad_preset --exit 2
   --stderr "M2/fit.json: \\(top level\\): unknown key .clayfit_fit."
   -- ${CLAYFIT} eval --preset ${EXPORT_DIR}/M2/fit.json ${UP})
+# Model versions (docs/model.md, top): a fit.json of version 1 (no
+# model_version key: Schlick's Fresnel) is still exported, with one warning;
+# an unknown version is refused, naming the file and the field.
+clayfit_cli_test(export_model_version_1
+  --stderr "M2-v1/fit.json: the values were fitted with model version 1 \\(Schlick's Fresnel\\)"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/M2-v1/fit.json --format json -o ${EXPORT_DIR}/M2-v1/preset.json)
+clayfit_cli_test(error_export_model_version --exit 2
+  --stderr "M2-v3/fit.json: model_version: unknown model version 3"
+  -- ${CLAYFIT} export ${EXPORT_DIR}/M2-v3/fit.json --format json -o ${EXPORT_DIR}/never.json)
 foreach(name error_export_missing_fit error_export_wrong_type error_export_unknown_format
-        error_export_no_format error_eval_bad_preset)
+        error_export_no_format error_eval_bad_preset export_model_version_1
+        error_export_model_version)
   set_tests_properties(cli_${name} PROPERTIES LABELS "cli;export" FIXTURES_REQUIRED export_fits)
 endforeach()
 

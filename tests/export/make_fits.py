@@ -44,7 +44,8 @@ def fit_json(model, values):
     n = len(slots)
     start = {k: v for k, v in values.items()}
     return {
-        "clayfit_fit": 1, "clayfit_version": "0.1.0", "created": "2026-11-22T12:00:00Z",
+        "clayfit_fit": 1, "clayfit_version": "0.1.0", "model_version": 2,
+        "created": "2026-11-22T12:00:00Z",
         "capture": {"path": "capture.json", "name": "fixture", "images": 2,
                     "observations": 1000, "radiometry": "absolute"},
         "model": {"code": model["code"], "name": model["name"]},
@@ -95,6 +96,16 @@ def main():
     os.makedirs(os.path.join(out, "bad"), exist_ok=True)
     with open(os.path.join(out, "bad", "fit.json"), "w", encoding="utf-8") as f:
         json.dump(bad, f, indent=2)
+    # model versions (docs/model.md, top): a fit.json of version 1, written
+    # before the key existed (Schlick's Fresnel), and one of an unknown version
+    for name, version in (("M2-v1", None), ("M2-v3", 3)):
+        old = fit_json(models[2], VALUES["M2"])
+        del old["model_version"]
+        if version is not None:
+            old["model_version"] = version
+        os.makedirs(os.path.join(out, name), exist_ok=True)
+        with open(os.path.join(out, name, "fit.json"), "w", encoding="utf-8") as f:
+            json.dump(old, f, indent=2)
     return 0
 
 

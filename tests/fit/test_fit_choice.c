@@ -3,7 +3,10 @@
  * below the capture's noise (a thin, nearly clear film over a clay whose
  * own lobe is faint) is assigned a simpler model, and the same capture
  * with ten times less noise (σ/10: read noise /10, shot-noise variance
- * /100) is assigned M4. */
+ * /100) is assigned M4. On every capture the chosen model's held-out RMS
+ * is within 10 % of the lowest (or its note says why), and on the M0
+ * capture M2's held-out RMS is within 2 % of M0's (issue 18). */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -39,6 +42,34 @@ static void print_table(const cf_fit_choice *choice) {
            cf_model_info_get(c->model)->code, c->parameters, c->bic, c->heldout_score,
            100.0 * c->heldout_relative_rmse, c->chosen ? "<- chosen" : "", c->note);
   }
+  if (choice->reading[0]) printf("    meaning: %s\n", choice->reading);
+}
+
+/* The held-out guard (issue 18): the chosen candidate's held-out RMS is
+ * within 10 % of the lowest, or its note says why not. */
+static void check_guard(const char *name, const cf_fit_choice *choice) {
+  const cf_fit_candidate *chosen = cf_fit_choice_chosen(choice);
+  double lowest = INFINITY;
+  for (int m = 0; m < choice->count; ++m)
+    if (choice->candidate[m].ok) lowest = fmin(lowest, choice->candidate[m].heldout_score);
+  CHECK(chosen && (chosen->heldout_score <= (1.0 + CF_FIT_CHOICE_HELDOUT_GUARD) * lowest ||
+                   strstr(chosen->note, "kept although")),
+        "%s: the chosen held-out RMS %g is more than 10 %% above the lowest %g, unexplained", name,
+        chosen ? chosen->heldout_score : NAN, lowest);
+}
+
+/* A Lambertian capture: M2 reaches M0 (f0 = 0, σ = 0), so its held-out
+ * RMS is within 2 % of M0's (issue 18's nested ladder). */
+static void check_nested(const char *name, const cf_fit_choice *choice) {
+  const cf_fit_candidate *m0 = NULL, *m2 = NULL;
+  for (int m = 0; m < choice->count; ++m) {
+    const cf_fit_candidate *c = &choice->candidate[m];
+    if (c->ok && c->model == CF_MODEL_LAMBERT) m0 = c;
+    if (c->ok && c->model == CF_MODEL_DIELECTRIC) m2 = c;
+  }
+  CHECK(m0 && m2 && m2->heldout_score <= 1.02 * m0->heldout_score,
+        "%s: M2's held-out RMS %g is more than 2 %% above M0's %g", name,
+        m2 ? m2->heldout_score : NAN, m0 ? m0->heldout_score : NAN);
 }
 
 static void choose(const char *dir, const choice_case *c) {
@@ -66,8 +97,11 @@ static void choose(const char *dir, const choice_case *c) {
     else
       CHECK(choice.chosen < c->truth, "%s: chose %s, expected a model simpler than %s", c->name,
             chosen, cf_model_info_get(c->truth)->code);
-    CHECK(result.model == choice.chosen && choice.candidate[choice.chosen].chosen,
+    const cf_fit_candidate *chosen_one = cf_fit_choice_chosen(&choice);
+    CHECK(result.model == choice.chosen && chosen_one && chosen_one->model == choice.chosen,
           "%s: the result is not the chosen model's", c->name);
+    check_guard(c->name, &choice);
+    if (c->truth == CF_MODEL_LAMBERT) check_nested(c->name, &choice);
   }
   cf_fit_choice_free(&choice);
   cf_fit_result_free(&result);

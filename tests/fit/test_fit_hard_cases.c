@@ -11,7 +11,11 @@
  *                    the base hidden, its parameters not constrained, the
  *                    film recovered
  *   no_highlight     M2 seen through masks that hide every highlight: the
- *                    top roughness not constrained
+ *                    top roughness not constrained, or (model version 2,
+ *                    whose exact Fresnel shapes the body's grazing fall-off
+ *                    and so fixes F0 without the highlight) fitted from the
+ *                    lobe's tails outside the masks, within 3 sd of the
+ *                    truth
  *   outliers         5 % of the sphere's pixels brightened (dust, flare):
  *                    the robust loss keeps the fit near the truth
  *   sigma_zero       M2 with the Oren-Nayar σ = 0, where ∂f/∂σ = 0: σ ends
@@ -255,8 +259,18 @@ static void no_highlight(void) {
   fit_test_edit_images(folder, "masks", so.images, 16, clear_highlight, &job);
   cf_fit_result r;
   if (!fit("no_highlight", fit_test_load(folder), CF_MODEL_DIELECTRIC, 1, &r)) return;
-  CHECK(r.status[CF_DIELECTRIC_ROUGHNESS] == CF_PARAM_UNCONSTRAINED,
-        "no_highlight: roughness is %s", cf_param_status_name(r.status[CF_DIELECTRIC_ROUGHNESS]));
+  /* Under Schlick's F (model version 1) F0 only scaled the body, like the
+   * albedo, and F0 and r shared the lobe's tails: r was not constrained.
+   * The exact F changes the body's shape with F0, which is then fixed
+   * without the highlight, and the tails beyond the 30-px discs fix r
+   * (measured: r 0.279 +- 0.026, F0 0.0449 +- 0.0055; truth 0.3, 0.05). */
+  double r_fit = r.params[CF_DIELECTRIC_ROUGHNESS], r_sd = r.sd[CF_DIELECTRIC_ROUGHNESS];
+  double r_true = m2_truth[CF_DIELECTRIC_ROUGHNESS];
+  CHECK(r.status[CF_DIELECTRIC_ROUGHNESS] == CF_PARAM_UNCONSTRAINED ||
+            (r.status[CF_DIELECTRIC_ROUGHNESS] == CF_PARAM_FITTED &&
+             fabs(r_fit - r_true) <= 3.0 * r_sd),
+        "no_highlight: roughness is %s: %g +- %g (truth %g)",
+        cf_param_status_name(r.status[CF_DIELECTRIC_ROUGHNESS]), r_fit, r_sd, r_true);
   cf_fit_result_free(&r);
 }
 

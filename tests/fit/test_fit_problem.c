@@ -265,7 +265,14 @@ static void test_light_gains(const cf_capture *capture) {
   p.loss = CF_LOSS_NONE;
   p.block_size = 256;
   const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.8, 0.7, 0.9, 1.1, 1.3, 1.2};
+  /* each pass starts from the same parameters, a little off them: carried
+   * over, the second pass put f0 on its bound 0, where the exact Fresnel
+   * (model version 2) has a one-sided derivative only and a central
+   * difference straddles the bound */
+  double start[CF_MAX_DIM];
+  memcpy(start, p.params, sizeof start);
   for (int curve = 0; curve < 2; ++curve) {
+    memcpy(p.params, start, sizeof start);
     if (curve) memcpy(p.response, slopes, sizeof slopes);
     fit_problem_clear_unknowns(&p);
     for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);

@@ -102,3 +102,11 @@ add_test(NAME gallery_browser
                  --browser ${GALLERY_DIR}/screenshot.png)
 set_tests_properties(gallery_browser PROPERTIES LABELS "report" FIXTURES_REQUIRED gallery_page
                      SKIP_RETURN_CODE 77 TIMEOUT 300)
+
+# Issue 18 item 5: the share of the rejected observations in one connected
+# region per image, a systematic misfit (a glossy capture fitted with M0)
+# against scattered rejections (noise beyond a loss scale of 2 sigma).
+add_test(NAME report_regions
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_regions.py ${CLAYFIT}
+                 ${CMAKE_CURRENT_BINARY_DIR}/report_regions)
+set_tests_properties(report_regions PROPERTIES LABELS "cli;report")

@@ -30,13 +30,39 @@ auto Dot(const Vec3<T> &a, const Vec3<U> &b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
-// Schlick (docs/model.md (8)), c clamped to [0, 1].
+// The exact unpolarised dielectric Fresnel (docs/model.md (8), model
+// version 2), in the textbook form of Walter et al. 2007 eq. 22 with η
+// from F0 (7): g = sqrt(η² − 1 + c²),
+//   F = ½ (g − c)²/(g + c)² (1 + ((c (g + c) − 1)/(c (g − c) + 1))²).
+// At F0 = 0 (η = 1) F is 0 and √F0's derivative infinite: F is returned
+// as its first-order term (1 + (1 − 2c²)²)/(2c⁴) · F0, whose Jet carries
+// the limit of ∂F/∂F0 (docs/model.md §2.1).
 template <typename T, typename C>
-T Fresnel(const T &f0, C c) {
-  if (c > C(1.0)) c = C(1.0);
-  if (c < C(0.0)) c = C(0.0);
-  C m = C(1.0) - c;
-  return f0 + (T(1.0) - f0) * (m * m * m * m * m);
+T Fresnel(const T &f0, const C &c) {
+  using std::sqrt;
+  if (f0 == T(0.0)) {
+    C m = 1.0 - 2.0 * c * c;
+    return f0 * ((1.0 + m * m) / (2.0 * c * c * c * c));
+  }
+  T sq = sqrt(f0);
+  T eta = (1.0 + sq) / (1.0 - sq);
+  T g = sqrt(eta * eta - 1.0 + c * c);
+  T a = (g - c) / (g + c);
+  T b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+  return 0.5 * a * a * (1.0 + b * b);
+}
+
+// Its cosine-weighted hemispherical mean ∫ F 2c dc for light from outside,
+// in closed form (docs/model.md (27); Stern 1964), for η > 1.
+template <typename T>
+T FresnelMean(const T &eta) {
+  using std::log;
+  T e2 = eta * eta, e4 = e2 * e2;
+  return 0.5 + (eta - 1.0) * (3.0 * eta + 1.0) / (6.0 * (eta + 1.0) * (eta + 1.0)) +
+         e2 * (e2 - 1.0) * (e2 - 1.0) / ((e2 + 1.0) * (e2 + 1.0) * (e2 + 1.0)) *
+             log((eta - 1.0) / (eta + 1.0)) -
+         2.0 * e2 * eta * (e2 + 2.0 * eta - 1.0) / ((e2 + 1.0) * (e4 - 1.0)) +
+         8.0 * e4 * (e4 + 1.0) / ((e2 + 1.0) * (e4 - 1.0) * (e4 - 1.0)) * log(eta);
 }
 
 template <typename T, typename C>
@@ -110,7 +136,7 @@ void Clay(const T *p, const Vec3<double> &n, const Vec3<double> &l, const Vec3<d
   Vec3<T> vp{(v.x - c_o * n.x) / eta + c_op * n.x, (v.y - c_o * n.y) / eta + c_op * n.y,
              (v.z - c_o * n.z) / eta + c_op * n.z};
   T transmission = (1.0 - Fresnel(f0_1, c_i)) * (1.0 - Fresnel(f0_1, c_o));  // 4
-  T fbar_e = f0_1 + (1.0 - f0_1) / 21.0;                                     // step 6
+  T fbar_e = FresnelMean(eta);                                               // step 6
   T fbar_i = 1.0 - (1.0 - fbar_e) / (eta * eta);
   T base_specular = Specular(f0_2, r2, nt, lp, vp);  // step 7
   T base_transmission = (1.0 - Fresnel(f0_2, c_ip)) * (1.0 - Fresnel(f0_2, c_op));
