@@ -13,8 +13,6 @@
  * and the base needs no vectors. */
 #include "models.h"
 
-enum { DIM = CF_CLAY_DIM };
-
 static void clay_prepare(const double *params, cf_prepared *prep) {
   cf_clay_prep *p = &prep->clay;
   double sigma = params[CF_CLAY_DIFFUSE_ROUGHNESS];
@@ -28,6 +26,8 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
   p->inv_a2_2 = 1.0 / p->a2_2;
   p->da2_2 = 4.0 * r2 * r2 * r2;
   p->f0_2 = params[CF_CLAY_BASE_F0];
+  p->tailed = 0;
+  p->tail_1 = p->tail_2 = (cf_std_tail){0};
 
   /* step 1: η1 = (1 + √F0_1)/(1 − √F0_1), in s = √F0_1 (ds/dF0_1 = 1/(2s);
    * F0_1 >= 0.01 keeps s >= 0.1) */
@@ -79,15 +79,18 @@ static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
   return r;
 }
 
+/* grad: rows of length dim (M4's 11, M4T's 12 with the tail last). */
 CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
-                                double *grad, cf_clay_terms *terms) {
+                                double *grad, int dim, cf_clay_terms *terms) {
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
   double weight_d = g->weight_d;
   double fresnel_1 = fresnel_schlick(p->f0_1, weight_d);
-  cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h);
-  cf_smith_v v1 = smith_ggx_v(p->a2_1, c_i, c_o);
+  cf_std_d d1;
+  cf_std_v v1;
+  cf_lobe_eval(p->tailed ? &p->tail_1 : NULL, p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h, c_i, c_o,
+               grad != NULL, &d1, &v1);
   double top = fresnel_1 * d1.value * v1.value;
 
   /* step 4: T(c_i) T(c_o), T(c) = (1 − F0_1)(1 − (1 − c)^5) */
@@ -107,8 +110,10 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   /* step 7: the base's specular and diffuse lobes, in the film */
   double weight_db = schlick_weight(hb.c_d);
   double fresnel_2 = fresnel_schlick(p->f0_2, weight_db);
-  cf_ggx_d d2 = ggx_d(p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h);
-  cf_smith_v v2 = smith_ggx_v(p->a2_2, ri.c, ro.c);
+  cf_std_d d2;
+  cf_std_v v2;
+  cf_lobe_eval(p->tailed ? &p->tail_2 : NULL, p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h, ri.c,
+               ro.c, grad != NULL, &d2, &v2);
   double base_specular = fresnel_2 * d2.value * v2.value;
   double one_minus_f0_2 = 1.0 - p->f0_2;
   double weight_ib = schlick_weight(ri.c), weight_ob = schlick_weight(ro.c);
@@ -162,6 +167,9 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
       fresnel_2 * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
   double dbase_spec_dr2 = fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
   double dbase_spec_df0_2 = (1.0 - weight_db) * d2.value * v2.value;
+  /* the one tail of both lobes (M4T) */
+  double dtop_dtail = fresnel_1 * (d1.d_gamma * v1.value + d1.value * v1.d_gamma);
+  double dbase_spec_dtail = fresnel_2 * (d2.d_gamma * v2.value + d2.value * v2.d_gamma);
 
   /* base diffuse: transmissions into the clay, and the angular factor */
   double dtransmission_b_df0_1 = one_minus_f0_2 * one_minus_f0_2 *
@@ -178,7 +186,7 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double ddiffuse_unit_df0_1 = dtransmission_b_df0_1 * on + transmission_b * don_df0_1;
   double dphi_unit_df0_1 = dtransmission * p->inv_eta2 + transmission * p->d_inv_eta2;
   for (int c = 0; c < 3; ++c) {
-    double *row = grad + c * DIM;
+    double *row = grad + c * dim;
     double k = p->k[c], k_rho = k * p->rho[c];
     double diffuse_b = diffuse_unit * p->rho[c]; /* K-free base diffuse */
     double dphi_df0_1 = absorption[c] * (dphi_unit_df0_1 - phi_unit * p->tau[c] * d_path);
@@ -193,19 +201,20 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
     row[CF_CLAY_OPTICAL_DEPTH + c] = phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
     row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
     row[CF_CLAY_BASE_F0] = phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
+    if (p->tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi[c] * dbase_spec_dtail;
   }
 }
 
 static void clay_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
-  clay_eval(&prep->clay, g, f, NULL, NULL);
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_DIM, NULL);
 }
 
 static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                             double *grad) {
   /* clay_eval writes every entry but the other channels' RGB ones */
-  cf_zero_other_channels(grad, DIM, CF_CLAY_ALBEDO);
-  cf_zero_other_channels(grad, DIM, CF_CLAY_OPTICAL_DEPTH);
-  clay_eval(&prep->clay, g, f, grad, NULL);
+  cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_ALBEDO);
+  cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_OPTICAL_DEPTH);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_DIM, NULL);
 }
 
 void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_terms *terms) {
@@ -214,7 +223,31 @@ void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_term
   cf_prepared prep;
   clay_prepare(params, &prep);
   double f[3];
-  clay_eval(&prep.clay, g, f, NULL, terms);
+  clay_eval(&prep.clay, g, f, NULL, CF_CLAY_DIM, terms);
 }
 
 const cf_model_impl cf_clay_impl = {clay_prepare, clay_value, clay_value_grad};
+
+/* M4T: M4's vector plus one tail for both lobes (model.h). */
+static void clay_tailed_prepare(const double *params, cf_prepared *prep) {
+  clay_prepare(params, prep);
+  cf_clay_prep *p = &prep->clay;
+  double gamma = params[CF_CLAY_TAILED_TAIL];
+  p->tailed = 1;
+  p->tail_1 = cf_std_tail_prepare(p->a2_1, gamma);
+  p->tail_2 = cf_std_tail_prepare(p->a2_2, gamma);
+}
+
+static void clay_tailed_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_TAILED_DIM, NULL);
+}
+
+static void clay_tailed_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
+                                   double *grad) {
+  cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_ALBEDO);
+  cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_OPTICAL_DEPTH);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_TAILED_DIM, NULL);
+}
+
+const cf_model_impl cf_clay_tailed_impl = {clay_tailed_prepare, clay_tailed_value,
+                                           clay_tailed_value_grad};

@@ -11,6 +11,8 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p) {
   p->a2 = (r * r) * (r * r);
   p->inv_a2 = 1.0 / p->a2;
   p->da2_dr = 4.0 * r * r * r;
+  p->tailed = 0;
+  p->tail = (cf_std_tail){0};
 }
 
 /* M2 and M3 share the slots of albedo, diffuse_roughness, roughness, f0. */
@@ -20,13 +22,31 @@ _Static_assert((int)CF_DIELECTRIC_F0 == (int)CF_CLEARCOAT_F0 &&
                    (int)CF_DIELECTRIC_ALBEDO == (int)CF_CLEARCOAT_ALBEDO,
                "M3 extends M2's parameter vector");
 
+/* The interface's D·V and its partials in α² and the tail: GGX's (M2, M3),
+ * or STD's (M2T, docs/model.md §2.8). */
+typedef struct interface_lobe {
+  double value, d_a2, d_tail;
+} interface_lobe;
+
+CF_ALWAYS_INLINE interface_lobe dielectric_lobe(const cf_dielectric_prep *p, const cf_geometry *g,
+                                                int with_grad) {
+  cf_std_d d;
+  cf_std_v vis;
+  cf_lobe_eval(p->tailed ? &p->tail : NULL, p->a2, p->inv_a2, g->sin2_h, g->cos2_h, g->cos_i,
+               g->cos_o, with_grad, &d, &vis);
+  interface_lobe lobe;
+  lobe.value = d.value * vis.value;
+  lobe.d_a2 = d.d_a2 * vis.value + d.value * vis.d_a2;
+  lobe.d_tail = d.d_gamma * vis.value + d.value * vis.d_gamma;
+  return lobe;
+}
+
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim) {
   /* specular lobe */
   double fresnel = fresnel_schlick(p->f0, g->weight_d);
-  cf_ggx_d d = ggx_d(p->a2, p->inv_a2, g->sin2_h, g->cos2_h);
-  cf_smith_v vis = smith_ggx_v(p->a2, g->cos_i, g->cos_o);
-  double dv = d.value * vis.value;
+  interface_lobe lobe = dielectric_lobe(p, g, grad != NULL);
+  double dv = lobe.value;
   double specular = fresnel * dv;
 
   /* diffuse lobe under the interface; each transmission is
@@ -39,7 +59,7 @@ void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, doubl
   if (!grad) return;
 
   cf_zero_other_channels(grad, dim, CF_DIELECTRIC_ALBEDO);
-  double ds_dr = fresnel * (d.d_a2 * vis.value + d.value * vis.d_a2) * p->da2_dr;
+  double ds_dr = fresnel * lobe.d_a2 * p->da2_dr;
   double ds_df0 = (1.0 - g->weight_d) * dv;
   double dt_df0 = -2.0 * one_minus_f0 * g->transmission;
   double dq_dsigma = p->diffuse.on.d_a + p->diffuse.on.d_b * x;
@@ -50,6 +70,7 @@ void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, doubl
     row[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] = transmission * rho_over_pi * dq_dsigma;
     row[CF_DIELECTRIC_ROUGHNESS] = ds_dr;
     row[CF_DIELECTRIC_F0] = ds_df0 + dt_df0 * rho_over_pi * q;
+    if (p->tailed) row[CF_DIELECTRIC_TAILED_TAIL] = fresnel * lobe.d_tail;
   }
 }
 
@@ -68,3 +89,23 @@ static void dielectric_value_grad(const cf_prepared *prep, const cf_geometry *g,
 
 const cf_model_impl cf_dielectric_impl = {dielectric_prepare, dielectric_value,
                                           dielectric_value_grad};
+
+/* M2T: M2's vector plus the tail (model.h). */
+static void dielectric_tailed_prepare(const double *params, cf_prepared *prep) {
+  cf_dielectric_prep *p = &prep->dielectric;
+  cf_dielectric_prepare(params, p);
+  p->tailed = 1;
+  p->tail = cf_std_tail_prepare(p->a2, params[CF_DIELECTRIC_TAILED_TAIL]);
+}
+
+static void dielectric_tailed_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
+  cf_dielectric_eval(&prep->dielectric, g, f, NULL, CF_DIELECTRIC_TAILED_DIM);
+}
+
+static void dielectric_tailed_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
+                                         double *grad) {
+  cf_dielectric_eval(&prep->dielectric, g, f, grad, CF_DIELECTRIC_TAILED_DIM);
+}
+
+const cf_model_impl cf_dielectric_tailed_impl = {dielectric_tailed_prepare, dielectric_tailed_value,
+                                                 dielectric_tailed_value_grad};

@@ -5,6 +5,7 @@
 #define CLAYFIT_MODEL_MODELS_H
 
 #include "clayfit/model.h"
+#include "tailed.h"
 #include "terms.h"
 
 /* M0 and the diffuse part of M1-M3: ρ/π and the Oren-Nayar coefficients. */
@@ -13,10 +14,12 @@ typedef struct cf_diffuse_prep {
   cf_oren_nayar_coeffs on;
 } cf_diffuse_prep;
 
-/* M2: the diffuse prep plus the specular interface. */
+/* M2 (and M2T): the diffuse prep plus the specular interface. */
 typedef struct cf_dielectric_prep {
   cf_diffuse_prep diffuse;
   double f0, a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
+  int tailed;                    /* M2T: the lobe is STD's with tail.gamma */
+  cf_std_tail tail;
 } cf_dielectric_prep;
 
 /* M3: M2 plus the coat (a = 0.1 − 0.099 gloss). */
@@ -28,6 +31,8 @@ typedef struct cf_clearcoat_prep {
 /* M4: everything that depends on the parameters only. Derivatives with
  * respect to the film's F0_1 are prefixed d_ (∂/∂F0_1). */
 typedef struct cf_clay_prep {
+  int tailed; /* M4T: both lobes are STD's, one tail */
+  cf_std_tail tail_1, tail_2;
   double rho[3];
   cf_oren_nayar_coeffs on;
   double f0_1, a2_1, inv_a2_1, da2_1; /* top interface */
@@ -46,6 +51,23 @@ typedef union cf_prepared {
   cf_clay_prep clay;
 } cf_prepared;
 
+/* One microfacet lobe's D and V with their partials: GGX's (terms.h), or
+ * STD's when `tail` is not NULL (M2T, M4T; tailed.h), which at tail 2 are
+ * GGX's to the bit. d_gamma is 0 for GGX. */
+CF_ALWAYS_INLINE void cf_lobe_eval(const cf_std_tail *tail, double a2, double inv_a2, double sin2_h,
+                                   double cos2_h, double c_i, double c_o, int with_grad,
+                                   cf_std_d *d, cf_std_v *v) {
+  if (!tail) {
+    cf_ggx_d gd = ggx_d(a2, inv_a2, sin2_h, cos2_h);
+    cf_smith_v gv = smith_ggx_v(a2, c_i, c_o);
+    *d = (cf_std_d){gd.value, gd.d_a2, 0.0, gd.d_sin2};
+    *v = (cf_std_v){gv.value, gv.d_a2, 0.0, gv.d_ci, gv.d_co};
+    return;
+  }
+  *d = std_d(tail, sin2_h, cos2_h);
+  *v = cf_std_v_eval(tail, c_i, c_o, with_grad);
+}
+
 /* value and value_grad are called for lit observations only (eval.c
  * answers the others); value_grad writes every entry of its 3 × dim
  * channel-major gradient (model.h). */
@@ -60,13 +82,16 @@ extern const cf_model_impl cf_oren_nayar_impl;
 extern const cf_model_impl cf_dielectric_impl;
 extern const cf_model_impl cf_clearcoat_impl;
 extern const cf_model_impl cf_clay_impl;
+extern const cf_model_impl cf_dielectric_tailed_impl;
+extern const cf_model_impl cf_clay_tailed_impl;
 
 /* Shared preparation of the diffuse body and the M2 interface (M1-M3). */
 void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p);
 void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 
 /* M2 with its gradient written into rows of length `dim` (M3 reuses it
- * with dim 8, and writes its own two entries); grad may be NULL. */
+ * with dim 8, and writes its own two entries; M2T with 7, the tail last);
+ * grad may be NULL. */
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim);
 

@@ -70,6 +70,11 @@ static inline cf_std_d std_d(const cf_std_tail *t, double sin2_h, double cos2_h)
   double gamma = t->gamma, b2 = t->b2;
   if (t->regime == CF_STD_GGX) {
     cf_ggx_d g = ggx_d(t->a2, t->inv_a2, sin2_h, cos2_h);
+    /* ∂/∂γ of the floored form below, as its neighbours γ = 2 ± h see it */
+    if (cos2_h < CF_STD_COS2_MIN) {
+      cos2_h = CF_STD_COS2_MIN;
+      sin2_h = 1.0 - CF_STD_COS2_MIN;
+    }
     double q = sin2_h + b2 * cos2_h, bc = b2 * cos2_h, r = bc / q;
     double ln_r = r < 0.5 ? log(r) : -log1p(sin2_h / bc);
     d.value = g.value;
