@@ -667,6 +667,267 @@ static void check_beckmann_limit(void) {
       worst_d, worst_l, CF_STD_GAMMA_BECKMANN);
 }
 
+/* ---- 9. the masking tabulated once per γ (tailed.h, docs/model.md §2.8
+ * "The table"): against the exact masking, its derivatives against
+ * differences of its own value, GGX at γ = 2, the hard cases, reciprocity ---- */
+
+/* c from 0 to 1: uniform, log-spaced toward 0 and toward 1 */
+enum { TABLE_CS = 1201 };
+static double table_c(int i) {
+  if (i <= 400) return i / 400.0;
+  if (i <= 800) return pow(10.0, -10.0 + 10.0 * (i - 400) / 400.0);
+  return 1.0 - pow(10.0, -15.0 * (i - 800) / 400.0);
+}
+
+static const double table_gammas[] = {1.5 + 1e-6, 1.501, 1.51, 1.52, 1.54, 1.55, 1.56, 1.6, 1.7,
+                                      1.8,        1.9,   1.99, 2.0,  2.01, 2.2,  2.5,  3.0, 3.7,
+                                      5.0,        10.0,  30.0, 100,  1e3,  1e4,  1e5,  5e5, 9.99e5};
+#define TABLE_GAMMA_ASSERTED 1.55 /* below: printed, not asserted */
+
+/* the worst relative error of the table's L against the exact masking */
+static double table_error(const cf_std_table *tb, double gamma) {
+  static const double rs[] = {0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0};
+  double worst = 0.0;
+  for (int i = 0; i < 10; ++i) {
+    cf_std_tail t = cf_std_tail_prepare(pow(rs[i], 4), gamma);
+    t.regime = CF_STD_GENERAL; /* γ = 2: the general formulas (1e-15 from GGX's) */
+    for (int k = 0; k < TABLE_CS; ++k) {
+      double c = table_c(k);
+      double exact = cf_std_masking_eval(&t, c, 0).value;
+      double tab = std_masking_tabulated(tb, t.a2, c, 0).value;
+      worst = fmax(worst, rel(tab, exact));
+    }
+  }
+  return worst;
+}
+
+static void check_table_accuracy(void) {
+  double worst = 0.0, worst_exact_nodes = 0.0, worst_low = 0.0, worst_slice = 0.0;
+  static cf_std_table tb, exact;
+  for (size_t i = 0; i < sizeof table_gammas / sizeof table_gammas[0]; ++i) {
+    double gamma = table_gammas[i];
+    cf_std_table_build(&tb, gamma);
+    cf_std_table_build_exact(&exact, gamma);
+    CHECK(tb.built && exact.built, "gamma %g: table not built", gamma);
+    double e = table_error(&tb, gamma), e_exact = table_error(&exact, gamma);
+    if (gamma >= TABLE_GAMMA_ASSERTED) {
+      CHECK(e <= 1e-6, "gamma %g: table against the exact masking, worst relative %.3g", gamma, e);
+      worst = fmax(worst, e);
+      worst_exact_nodes = fmax(worst_exact_nodes, e_exact);
+    } else {
+      printf("table below gamma %g: gamma %.7g worst relative %.2g (exact nodes %.2g)\n",
+             TABLE_GAMMA_ASSERTED, gamma, e, e_exact);
+      worst_low = fmax(worst_low, e);
+    }
+    /* the grid's slice against the exact nodes (the γ interpolation alone):
+     * c[0] is g at a step's lower node */
+    for (int k = 0; k < CF_STD_TABLE_STEPS; ++k)
+      worst_slice = fmax(worst_slice, rel(tb.step[k].c[0], exact.step[k].c[0]));
+  }
+  /* at the grid's own γ the slice is the exact nodes */
+  double worst_at_nodes = 0.0;
+  for (int j = 0; j < CF_STD_GRID_GAMMAS; j += 4) {
+    double gamma = 1.0 + 1.0 / std_grid_p(j);
+    if (!(gamma < CF_STD_GAMMA_BECKMANN)) continue;
+    cf_std_table_build(&tb, gamma);
+    cf_std_table_build_exact(&exact, gamma);
+    double scale = 0.0; /* ∂g/∂γ underflows at some nodes: against its largest */
+    for (int k = 0; k < CF_STD_TABLE_STEPS; ++k) scale = fmax(scale, fabs(exact.step[k].d[0]));
+    for (int k = 0; k < CF_STD_TABLE_STEPS; ++k)
+      worst_at_nodes =
+          fmax(worst_at_nodes, fmax(rel(tb.step[k].c[0], exact.step[k].c[0]),
+                                    fabs(tb.step[k].d[0] - exact.step[k].d[0]) / scale));
+  }
+  CHECK(worst_at_nodes <= 1e-9, "the slice at the grid's gammas: %.3g from the exact nodes",
+        worst_at_nodes);
+  CHECK(std_grid_p(16) == 1.0, "the grid has a node at GGX");
+  /* no table where the lobe needs none */
+  cf_std_table_build(&tb, 1.5);
+  CHECK(!tb.built, "a table at gamma 1.5");
+  cf_std_table_build(&tb, CF_STD_GAMMA_BECKMANN);
+  CHECK(!tb.built, "a table in the Beckmann regime");
+  printf(
+      "table: worst relative error of L %.2g for gamma in [%g, 1e6) (exact nodes %.2g; the "
+      "grid's gamma interpolation %.2g at the nodes, %.2g at its own gammas); below gamma %g: "
+      "%.2g\n",
+      worst, TABLE_GAMMA_ASSERTED, worst_exact_nodes, worst_slice, worst_at_nodes,
+      TABLE_GAMMA_ASSERTED, worst_low);
+}
+
+/* The tabulated lobe D V at x = {α², γ, −, −, sin²θ_h, c_i, c_o}, its table
+ * built for x's γ (exact nodes or the grid's slice). */
+static void eval_tabulated(const grad_point *p, const double *x, int exact_nodes, double *f,
+                           double g[NX]) {
+  static cf_std_table tb;
+  if (exact_nodes)
+    cf_std_table_build_exact(&tb, x[1]);
+  else
+    cf_std_table_build(&tb, x[1]);
+  cf_std_tail t = cf_std_tail_prepare(x[0], x[1]);
+  double cos2 = p->cos2 - (x[4] - p->x[4]);
+  cf_std_dv s = cf_std_dv_eval(&t, &tb, x[4], cos2, x[5], x[6], g != NULL);
+  *f = s.value;
+  if (!g) return;
+  double gs[NX] = {s.d_a2, s.d_gamma, 0, 0, s.d_sin2, s.d_ci, s.d_co};
+  memcpy(g, gs, sizeof gs);
+}
+
+static double compare_tabulated_gradient(const grad_point *p, int exact_nodes, const char *where) {
+  double f, g[NX], worst = 0.0;
+  eval_tabulated(p, p->x, exact_nodes, &f, g);
+  for (int k = 0; k < NX; ++k) {
+    if (k == 2 || k == 3) continue; /* F0, weight: the caller's Fresnel */
+    /* γ: a larger step, for the slice's rounding near γ = 1.5 (5e-13 relative:
+     * its variable p = 1/(γ − 1) carries 1e-16 absolute, and h ∝ 2γ − 3) */
+    double h = k == 1 ? fmin(1e-6 * p->x[1], 1e-4 * (p->x[1] - CF_STD_GAMMA_MIN)) : step_of(p, k);
+    if (!(h > 0.0)) continue;
+    double xp[NX], xm[NX], fp, fm;
+    memcpy(xp, p->x, sizeof xp), memcpy(xm, p->x, sizeof xm);
+    xp[k] += h, xm[k] -= h;
+    h = 0.5 * (xp[k] - xm[k]);
+    if (xp[k] == p->x[k] || xm[k] == p->x[k]) continue;
+    eval_tabulated(p, xp, exact_nodes, &fp, NULL);
+    eval_tabulated(p, xm, exact_nodes, &fm, NULL);
+    double fd = (fp - fm) / (2.0 * h);
+    double scale = fmax(fmax(fabs(f), fabs(fp)), fabs(fm));
+    double tol = 1e-6 * fmax(fabs(g[k]), fabs(fd)) + 1e-13 * scale / h + 1e-280;
+    double err = g[k] == fd ? 0.0 : fabs(g[k] - fd) / tol;
+    CHECK(err <= 1.0,
+          "%s: d(DV)/d%s = %.10g, differences %.10g (a2 %g gamma %.17g sin2 %g c_i %g c_o %g)",
+          where, x_names[k], g[k], fd, p->x[0], p->x[1], p->x[4], p->x[5], p->x[6]);
+    if (err > worst || err != err) worst = err != err ? INFINITY : err;
+  }
+  return worst;
+}
+
+static void check_table_gradients(cf_rng *rng) {
+  double worst = 0.0, worst_exact = 0.0, worst_hard = 0.0;
+  for (int i = 0; i < 3000; ++i) {
+    lobe_case k = random_case(rng, 0.2);
+    if (k.g.cos_i >= 1.0 || k.g.cos_o >= 1.0) continue;
+    double gamma = random_gamma(rng);
+    if (gamma >= CF_STD_GAMMA_BECKMANN) gamma = 2.5;
+    grad_point p = point_of(&k, gamma);
+    worst = fmax(worst, compare_tabulated_gradient(&p, 0, "tabulated"));
+    if (i % 20 == 0)
+      worst_exact = fmax(worst_exact, compare_tabulated_gradient(&p, 1, "tabulated, exact nodes"));
+  }
+  /* near-normal and grazing cosines, both ends of α, γ near 1.5, at 2, large */
+  static const double rs[] = {0.03, 1.0};
+  static const double gammas[] = {1.5 + 1e-4, 1.5 + 1e-2, 2.0, 3.0, 1e5};
+  static const double cs[] = {1e-8, 1e-3, 0.5, 1.0 - 1e-6};
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 5; ++b)
+      for (int i = 0; i < 4; ++i)
+        for (int o = 0; o < 4; ++o) {
+          double n[3] = {0, 0, 1}, l[3], v[3];
+          direction_from(cs[i], 0.0, l);
+          direction_from(cs[o], 0.5 * PI, v);
+          lobe_case k = {pow(rs[a], 4), 0.04, cf_geometry_from_directions(n, l, v)};
+          if (!cf_geometry_is_lit(&k.g)) continue;
+          grad_point p = point_of(&k, gammas[b]);
+          worst_hard = fmax(worst_hard, compare_tabulated_gradient(&p, 0, "tabulated hard case"));
+        }
+  printf(
+      "tabulated lobe derivatives against differences of its value: worst error / tolerance %.2g "
+      "(random), %.2g (exact nodes), %.2g (hard cases)\n",
+      worst, worst_exact, worst_hard);
+}
+
+static void check_table_ggx_reciprocity_hard(cf_rng *rng) {
+  /* γ = 2: GGX's code to the bit, in dielectric.c's order F (D V) */
+  long unequal = 0;
+  static cf_std_lobe_prep prep;
+  for (int i = 0; i < 20000; ++i) {
+    lobe_case k = random_case(rng, 0.2);
+    const cf_geometry *g = &k.g;
+    cf_ggx_d gd = ggx_d(k.a2, 1.0 / k.a2, g->sin2_h, g->cos2_h);
+    cf_smith_v gv = smith_ggx_v(k.a2, g->cos_i, g->cos_o);
+    double fresnel = fresnel_schlick(k.f0, g->weight_d);
+    if (i % 1000 == 0) cf_std_lobe_prepare(&prep, k.a2, 2.0);
+    prep.tail = cf_std_tail_prepare(k.a2, 2.0);
+    cf_std_dv s =
+        cf_std_dv_eval(&prep.tail, &prep.table, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, 1);
+    cf_std_dv r = cf_ggx_dv_eval(k.a2, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, 1);
+    unequal += fresnel * s.value != fresnel * (gd.value * gv.value) ||
+               fresnel * s.d_a2 != fresnel * (gd.d_a2 * gv.value + gd.value * gv.d_a2) ||
+               s.d_sin2 != gd.d_sin2 * gv.value || s.d_ci != gd.value * gv.d_ci ||
+               s.d_co != gd.value * gv.d_co || s.value != r.value || s.d_a2 != r.d_a2 ||
+               !(isfinite(s.d_gamma));
+  }
+  CHECK(unequal == 0, "tabulated lobe at gamma = 2: %ld cases differ from GGX's code", unequal);
+
+  /* reciprocity: one table for both directions */
+  double worst = 0.0;
+  for (int i = 0; i < 20000; ++i) {
+    lobe_case k = random_case(rng, 0.2);
+    if (i % 500 == 0) {
+      double gamma = random_gamma(rng);
+      cf_std_lobe_prepare(&prep, k.a2, gamma);
+    }
+    prep.tail = cf_std_tail_prepare(k.a2, prep.table.gamma);
+    const cf_geometry *g = &k.g;
+    cf_std_dv a =
+        cf_std_dv_eval(&prep.tail, &prep.table, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, 1);
+    cf_std_dv b =
+        cf_std_dv_eval(&prep.tail, &prep.table, g->sin2_h, g->cos2_h, g->cos_o, g->cos_i, 1);
+    double e = fmax(fmax(rel(a.value, b.value), rel(a.d_gamma, b.d_gamma)),
+                    fmax(rel(a.d_ci, b.d_co), rel(a.d_a2, b.d_a2)));
+    CHECK(e <= 1e-12, "tabulated reciprocity: %.17g against %.17g (gamma %g)", a.value, b.value,
+          prep.table.gamma);
+    worst = fmax(worst, e);
+  }
+
+  /* the hard-case grid */
+  enum { MAX = 512 };
+  static double n[MAX][3], l[MAX][3], v[MAX][3];
+  size_t count = hard_geometries(n, l, v, MAX);
+  static const double rs[] = {0.03, 1.0};
+  static const double gammas[] = {1.5 + 1e-9, 1.5 + 1e-3, 1.7, 2.0, 3.0, 1e5, 1e6, 1e12};
+  long lit = 0, bad = 0;
+  for (int j = 0; j < 8; ++j) {
+    cf_std_table_build(&prep.table, gammas[j]);
+    for (int i = 0; i < 2; ++i) {
+      prep.tail = cf_std_tail_prepare(pow(rs[i], 4), gammas[j]);
+      for (size_t c = 0; c < count; ++c) {
+        cf_geometry g = cf_geometry_from_directions(n[c], l[c], v[c]);
+        if (!cf_geometry_is_lit(&g)) continue;
+        cf_std_dv s =
+            cf_std_dv_eval(&prep.tail, &prep.table, g.sin2_h, g.cos2_h, g.cos_i, g.cos_o, 1);
+        int ok = isfinite(s.value) && s.value >= 0.0 && isfinite(s.d_a2) && isfinite(s.d_gamma);
+        if (g.cos_i * g.cos_o >= HARD_ANGLE_MIN)
+          ok = ok && isfinite(s.d_sin2) && isfinite(s.d_ci) && isfinite(s.d_co);
+        ++lit;
+        if (!ok) {
+          ++bad;
+          CHECK(0, "tabulated hard case: c_i %g c_o %g r %g gamma %g: value %g d_gamma %g d_ci %g",
+                g.cos_i, g.cos_o, rs[i], gammas[j], s.value, s.d_gamma, s.d_ci);
+        }
+      }
+    }
+  }
+  /* the masking's own edges: c = 0, 1, one ulp above 1 (a refracted cosine's
+   * rounding), subnormal; L = 1 at c = 1 */
+  static const double edge_c[] = {0.0, 1.0, 1.0 + 0x1p-52, 1e-310, 0x1p-50};
+  for (int j = 0; j < 8; ++j) {
+    cf_std_table_build(&prep.table, gammas[j]);
+    if (!prep.table.built) continue;
+    for (int i = 0; i < 2; ++i)
+      for (int k = 0; k < 5; ++k) {
+        cf_std_masking m = std_masking_tabulated(&prep.table, pow(rs[i], 4), edge_c[k], 1);
+        int ok = isfinite(m.value) && m.value > 0.0 && isfinite(m.d_c) && isfinite(m.d_a2) &&
+                 isfinite(m.d_gamma);
+        if (edge_c[k] >= 1.0) ok = ok && fabs(m.value - 1.0) <= 1e-15;
+        CHECK(ok, "tabulated masking at c = %.17g (r %g gamma %g): L %.17g d_c %g d_gamma %g",
+              edge_c[k], rs[i], gammas[j], m.value, m.d_c, m.d_gamma);
+      }
+  }
+  printf(
+      "tabulated lobe: GGX's code to the bit at gamma = 2 (20000 cases); reciprocity worst %.2g; "
+      "hard-case grid %ld lit evaluations, %ld not finite\n",
+      worst, lit, bad);
+}
+
 /* ---- the cost of one evaluation (printed, never asserted) ---- */
 
 static double seconds_now(void) {
@@ -712,6 +973,30 @@ static double bench(const cf_geometry *g, double a2, double gamma, int with_grad
   return 1e9 * elapsed / (double)calls;
 }
 
+/* the tabulated D V (cf_std_dv_eval), or GGX's (gamma 0) */
+static double bench_dv(const cf_geometry *g, double a2, double gamma, int with_grad) {
+  volatile double sink = 0.0;
+  long calls = 0;
+  double start = seconds_now(), elapsed;
+  static cf_std_lobe_prep prep;
+  if (gamma > 0.0) cf_std_lobe_prepare(&prep, a2, gamma);
+  do {
+    double sum = 0.0;
+    for (int i = 0; i < BENCH_CASES; ++i) {
+      cf_std_dv s = gamma > 0.0 ? cf_std_dv_eval(&prep.tail, &prep.table, g[i].sin2_h, g[i].cos2_h,
+                                                 g[i].cos_i, g[i].cos_o, with_grad)
+                                : cf_ggx_dv_eval(a2, g[i].sin2_h, g[i].cos2_h, g[i].cos_i,
+                                                 g[i].cos_o, with_grad);
+      sum += s.value + 1e-30 * (s.d_a2 + s.d_gamma + s.d_ci + s.d_co + s.d_sin2);
+    }
+    sink += sum;
+    calls += BENCH_CASES;
+    elapsed = seconds_now() - start;
+  } while (elapsed < 0.2);
+  (void)sink;
+  return 1e9 * elapsed / (double)calls;
+}
+
 static void print_cost(cf_rng *rng) {
   static cf_geometry g[BENCH_CASES];
   for (int i = 0; i < BENCH_CASES; ++i) g[i] = random_case(rng, 0.05).g;
@@ -725,6 +1010,23 @@ static void print_cost(cf_rng *rng) {
     printf("; STD gamma %g %.1f ns (%.1fx)", gammas[j], ns, ns / ggx);
   }
   printf("; STD gamma 2.5 value only %.1f ns\n", bench(g, a2, 2.5, 0));
+  printf("tabulated D V (no Fresnel), value + gradient: GGX %.1f ns", bench_dv(g, a2, 0.0, 1));
+  for (int j = 0; j < 5; ++j)
+    printf("; gamma %g %.1f ns", gammas[j], bench_dv(g, a2, gammas[j], 1));
+  printf("; gamma 2.5 value only %.1f ns (GGX %.1f)\n", bench_dv(g, a2, 2.5, 0),
+         bench_dv(g, a2, 0.0, 0));
+  static cf_std_table tb;
+  double start = seconds_now(), elapsed;
+  long builds = 0;
+  do {
+    cf_std_table_build(&tb, 2.5 + 1e-9 * (double)(builds++ % 1000));
+  } while ((elapsed = seconds_now() - start) < 0.1);
+  printf("table build: %.2f us from the grid", 1e6 * elapsed / (double)builds);
+  start = seconds_now(), builds = 0;
+  do {
+    cf_std_table_build_exact(&tb, 2.5 + 1e-9 * (double)(builds++ % 1000));
+  } while ((elapsed = seconds_now() - start) < 0.1);
+  printf(", %.1f us from the exact masking (gamma 2.5)\n", 1e6 * elapsed / (double)builds);
 }
 
 /* Usage: test_tailed_lobe [SECTION]: all sections, or the one named
@@ -744,6 +1046,9 @@ int main(int argc, char **argv) {
   SECTION("furnace", check_white_furnace());
   SECTION("hard", check_hard_grid());
   SECTION("beckmann", check_beckmann_limit());
+  SECTION("table", check_table_accuracy());
+  SECTION("table", check_table_gradients(&rng));
+  SECTION("table", check_table_ggx_reciprocity_hard(&rng));
   SECTION("bench", print_cost(&rng));
 #undef SECTION
   return check_finish("test_tailed_lobe");

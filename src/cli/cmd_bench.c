@@ -1,6 +1,7 @@
 /* clayfit bench eval: evaluations per second of every model, value only and
  * value + gradient, on one thread, over a fixed random set of directions.
- * A benchmark prints numbers; it asserts nothing. */
+ * Then the specular lobe alone (GGX, and STD's exact and tabulated), and
+ * the STD table's build. A benchmark prints numbers; it asserts nothing. */
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,7 @@
 #include "core/clock.h"
 #include "core/rng.h"
 #include "json_out.h"
+#include "model/tailed.h"
 
 enum { BENCH_SEED = 20261122 };
 
@@ -98,6 +100,103 @@ static timing time_mode(const bench_data *d, cf_model_id model, const double *pa
   return (timing){per_eval[passes / 2], per_eval[0], passes};
 }
 
+/* ---- the specular lobe alone, D V (src/model/tailed.h, issue 18): GGX's,
+ * STD's with its exact masking, and STD's with the masking tabulated once
+ * per γ; and the table's build, the cost a model's prepare adds ---- */
+
+enum { LOBE_GGX, LOBE_STD_EXACT, LOBE_STD_TABLE, LOBE_COUNT };
+static const char *const lobe_names[LOBE_COUNT] = {"GGX", "STD exact", "STD tabulated"};
+
+static double lobe_pass(const bench_data *d, int kind, const cf_std_lobe_prep *p, int grad) {
+  double sum = 0.0;
+  for (size_t i = 0; i < d->count; ++i) {
+    const cf_geometry *g = &d->geometry[i];
+    if (kind == LOBE_STD_EXACT) { /* F = 1: F0 = 1 */
+      cf_std_lobe s =
+          cf_std_lobe_eval(&p->tail, 1.0, 0.0, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad);
+      sum += s.value + 1e-30 * (s.d_a2 + s.d_gamma + s.d_ci + s.d_co + s.d_sin2);
+    } else {
+      cf_std_dv s =
+          kind == LOBE_GGX
+              ? cf_ggx_dv_eval(p->tail.a2, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad)
+              : cf_std_dv_eval(&p->tail, &p->table, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad);
+      sum += s.value + 1e-30 * (s.d_a2 + s.d_gamma + s.d_ci + s.d_co + s.d_sin2);
+    }
+  }
+  return sum;
+}
+
+/* The median ns per call of `pass` over passes lasting min_time in all. */
+static double median_ns(double (*pass)(void *), void *user, double calls, double min_time) {
+  enum { MAX_PASSES = 1000 };
+  double per_call[MAX_PASSES];
+  volatile double sink = pass(user); /* warm-up */
+  int passes = 0;
+  double start = cf_now_seconds();
+  while (passes < MAX_PASSES && (passes < 5 || cf_now_seconds() - start < min_time)) {
+    double t0 = cf_now_seconds();
+    sink += pass(user);
+    per_call[passes++] = (cf_now_seconds() - t0) * 1e9 / calls;
+  }
+  (void)sink;
+  qsort(per_call, (size_t)passes, sizeof per_call[0], compare_doubles);
+  return per_call[passes / 2];
+}
+
+typedef struct lobe_job {
+  const bench_data *d;
+  cf_std_lobe_prep prep;
+  int kind, grad, exact_build;
+} lobe_job;
+
+static double lobe_job_pass(void *user) {
+  const lobe_job *j = user;
+  return lobe_pass(j->d, j->kind, &j->prep, j->grad);
+}
+
+static double build_job_pass(void *user) { /* 100 builds of the table */
+  lobe_job *j = user;
+  for (int i = 0; i < 100; ++i) {
+    double gamma = j->prep.tail.gamma + 1e-9 * i;
+    if (j->exact_build)
+      cf_std_table_build_exact(&j->prep.table, gamma);
+    else
+      cf_std_table_build(&j->prep.table, gamma);
+  }
+  return j->prep.table.step[0].c[0];
+}
+
+static void time_lobes(const bench_data *d, double min_time) {
+  static lobe_job job; /* the table is a few kB: not on the stack */
+  job.d = d;
+  double r = 0.3, gamma = 2.5;
+  cf_std_lobe_prepare(&job.prep, r * r * r * r, gamma);
+  printf(
+      "\nthe specular lobe D V alone (no Fresnel), roughness %g, STD tail gamma %g, "
+      "median ns per evaluation\n%-16s %14s %14s\n",
+      r, gamma, "lobe", "value", "value+grad");
+  for (int kind = 0; kind < LOBE_COUNT; ++kind) {
+    double ns[2];
+    for (int grad = 0; grad < 2; ++grad) {
+      job.kind = kind, job.grad = grad;
+      /* the exact masking is 20-40x slower: a fraction of the time suffices */
+      ns[grad] = median_ns(lobe_job_pass, &job, (double)d->count,
+                           kind == LOBE_STD_EXACT ? 0.2 * min_time : min_time);
+    }
+    printf("%-16s %14.1f %14.1f\n", lobe_names[kind], ns[0], ns[1]);
+  }
+  double us[2];
+  for (int exact = 0; exact < 2; ++exact) {
+    job.exact_build = exact;
+    us[exact] = 1e-3 * median_ns(build_job_pass, &job, 100.0, exact ? 0.2 * min_time : min_time);
+  }
+  printf(
+      "STD table build per prepare: %.2f us from the grid over gamma (%.1f us from the exact "
+      "masking)\n",
+      us[0], us[1]);
+  fflush(stdout);
+}
+
 static void bench_usage(FILE *out) {
   fprintf(out,
           "usage: clayfit bench eval [--count N] [--min-time SECONDS] [--json]\n\n"
@@ -105,7 +204,10 @@ static void bench_usage(FILE *out) {
           "gradient (from precomputed geometry, the fitter's hot path, and from\n"
           "directions), over N fixed random observations (default 65536) with the\n"
           "models' default parameters. Reports the median and the best pass over\n"
-          "passes lasting at least --min-time seconds (default 0.5) per case.\n");
+          "passes lasting at least --min-time seconds (default 0.5) per case.\n"
+          "Then (not with --json) the specular lobe D V alone: GGX's, STD's with its\n"
+          "exact masking and with the masking tabulated once per tail, and the\n"
+          "table's build per prepare.\n");
 }
 
 /* Every model and mode timed: the table on stdout (or a line of progress
@@ -193,6 +295,7 @@ int cmd_bench(int argc, char **argv, cli_context *ctx) {
     return CLI_EXIT_FAILURE;
   }
   json_t *rows = time_all(&d, count, min_time, as_json, ctx);
+  if (!as_json) time_lobes(&d, min_time);
   bench_data_free(&d);
   if (as_json)
     return json_print(stdout, json_pack("{s:s, s:I, s:i, s:o}", "benchmark", "eval", "observations",

@@ -26,8 +26,6 @@ static void clay_prepare(const double *params, cf_prepared *prep) {
   p->inv_a2_2 = 1.0 / p->a2_2;
   p->da2_2 = 4.0 * r2 * r2 * r2;
   p->f0_2 = params[CF_CLAY_BASE_F0];
-  p->tailed = 0;
-  p->tail_1 = p->tail_2 = (cf_std_tail){0};
 
   /* step 1: η1 = (1 + √F0_1)/(1 − √F0_1), in s = √F0_1 (ds/dF0_1 = 1/(2s);
    * F0_1 >= 0.01 keeps s >= 0.1) */
@@ -79,19 +77,18 @@ static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
   return r;
 }
 
-/* grad: rows of length dim (M4's 11, M4T's 12 with the tail last). */
+/* grad: rows of length dim (M4's 11, M4T's 12 with the tail last); tailed:
+ * a constant at each call (M4T), so that M4 keeps GGX's code. */
 CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
-                                double *grad, int dim, cf_clay_terms *terms) {
+                                double *grad, int dim, int tailed, cf_clay_terms *terms) {
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
   double weight_d = g->weight_d;
   double fresnel_1 = fresnel_schlick(p->f0_1, weight_d);
-  cf_std_d d1;
-  cf_std_v v1;
-  cf_lobe_eval(p->tailed ? &p->tail_1 : NULL, p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h, c_i, c_o,
-               grad != NULL, &d1, &v1);
-  double top = fresnel_1 * d1.value * v1.value;
+  cf_std_dv s1 = cf_lobe_dv(tailed ? &p->tail_1 : NULL, &p->table, p->a2_1, p->inv_a2_1,
+                            g->sin2_h, g->cos2_h, c_i, c_o, grad != NULL);
+  double top = fresnel_1 * s1.value;
 
   /* step 4: T(c_i) T(c_o), T(c) = (1 − F0_1)(1 − (1 − c)^5) */
   double w = g->transmission;
@@ -110,11 +107,9 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   /* step 7: the base's specular and diffuse lobes, in the film */
   double weight_db = schlick_weight(hb.c_d);
   double fresnel_2 = fresnel_schlick(p->f0_2, weight_db);
-  cf_std_d d2;
-  cf_std_v v2;
-  cf_lobe_eval(p->tailed ? &p->tail_2 : NULL, p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h, ri.c,
-               ro.c, grad != NULL, &d2, &v2);
-  double base_specular = fresnel_2 * d2.value * v2.value;
+  cf_std_dv s2 = cf_lobe_dv(tailed ? &p->tail_2 : NULL, &p->table, p->a2_2, p->inv_a2_2,
+                            hb.sin2_h, hb.cos2_h, ri.c, ro.c, grad != NULL);
+  double base_specular = fresnel_2 * s2.value;
   double one_minus_f0_2 = 1.0 - p->f0_2;
   double weight_ib = schlick_weight(ri.c), weight_ob = schlick_weight(ro.c);
   double w_b = (1.0 - weight_ib) * (1.0 - weight_ob);
@@ -146,8 +141,8 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
 
   /* ---- derivatives ---- */
   /* top lobe */
-  double dtop_dr1 = fresnel_1 * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
-  double dtop_df0_1 = (1.0 - weight_d) * d1.value * v1.value;
+  double dtop_dr1 = fresnel_1 * s1.d_a2 * p->da2_1;
+  double dtop_df0_1 = (1.0 - weight_d) * s1.value;
   double dtransmission = -2.0 * one_minus_f0_1 * w;
 
   /* ∂/∂F0_1 of the refracted invariants */
@@ -162,14 +157,14 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
 
   /* base specular: through F(c_d'), D(sin²θ_h') and V(c_i', c_o') */
   double dbase_spec_df0_1 =
-      (1.0 - p->f0_2) * schlick_weight_dc(hb.c_d) * d_c_d_b * d2.value * v2.value +
-      fresnel_2 * d2.d_sin2 * d_sin2_b * v2.value +
-      fresnel_2 * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
-  double dbase_spec_dr2 = fresnel_2 * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
-  double dbase_spec_df0_2 = (1.0 - weight_db) * d2.value * v2.value;
+      (1.0 - p->f0_2) * schlick_weight_dc(hb.c_d) * d_c_d_b * s2.value +
+      fresnel_2 * s2.d_sin2 * d_sin2_b +
+      fresnel_2 * (s2.d_ci * ri.d_c + s2.d_co * ro.d_c);
+  double dbase_spec_dr2 = fresnel_2 * s2.d_a2 * p->da2_2;
+  double dbase_spec_df0_2 = (1.0 - weight_db) * s2.value;
   /* the one tail of both lobes (M4T) */
-  double dtop_dtail = fresnel_1 * (d1.d_gamma * v1.value + d1.value * v1.d_gamma);
-  double dbase_spec_dtail = fresnel_2 * (d2.d_gamma * v2.value + d2.value * v2.d_gamma);
+  double dtop_dtail = fresnel_1 * s1.d_gamma;
+  double dbase_spec_dtail = fresnel_2 * s2.d_gamma;
 
   /* base diffuse: transmissions into the clay, and the angular factor */
   double dtransmission_b_df0_1 = one_minus_f0_2 * one_minus_f0_2 *
@@ -201,12 +196,12 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
     row[CF_CLAY_OPTICAL_DEPTH + c] = phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
     row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
     row[CF_CLAY_BASE_F0] = phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
-    if (p->tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi[c] * dbase_spec_dtail;
+    if (tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi[c] * dbase_spec_dtail;
   }
 }
 
 static void clay_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
-  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_DIM, NULL);
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_DIM, 0, NULL);
 }
 
 static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
@@ -214,7 +209,7 @@ static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g, doubl
   /* clay_eval writes every entry but the other channels' RGB ones */
   cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_ALBEDO);
   cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_OPTICAL_DEPTH);
-  clay_eval(&prep->clay, g, f, grad, CF_CLAY_DIM, NULL);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_DIM, 0, NULL);
 }
 
 void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_terms *terms) {
@@ -223,7 +218,7 @@ void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_term
   cf_prepared prep;
   clay_prepare(params, &prep);
   double f[3];
-  clay_eval(&prep.clay, g, f, NULL, CF_CLAY_DIM, terms);
+  clay_eval(&prep.clay, g, f, NULL, CF_CLAY_DIM, 0, terms);
 }
 
 const cf_model_impl cf_clay_impl = {clay_prepare, clay_value, clay_value_grad};
@@ -233,20 +228,20 @@ static void clay_tailed_prepare(const double *params, cf_prepared *prep) {
   clay_prepare(params, prep);
   cf_clay_prep *p = &prep->clay;
   double gamma = params[CF_CLAY_TAILED_TAIL];
-  p->tailed = 1;
   p->tail_1 = cf_std_tail_prepare(p->a2_1, gamma);
   p->tail_2 = cf_std_tail_prepare(p->a2_2, gamma);
+  cf_std_table_build(&p->table, gamma); /* the masking of both lobes (one tail) */
 }
 
 static void clay_tailed_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
-  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_TAILED_DIM, NULL);
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_TAILED_DIM, 1, NULL);
 }
 
 static void clay_tailed_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                                    double *grad) {
   cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_ALBEDO);
   cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_OPTICAL_DEPTH);
-  clay_eval(&prep->clay, g, f, grad, CF_CLAY_TAILED_DIM, NULL);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_TAILED_DIM, 1, NULL);
 }
 
 const cf_model_impl cf_clay_tailed_impl = {clay_tailed_prepare, clay_tailed_value,

@@ -11,8 +11,6 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p) {
   p->a2 = (r * r) * (r * r);
   p->inv_a2 = 1.0 / p->a2;
   p->da2_dr = 4.0 * r * r * r;
-  p->tailed = 0;
-  p->tail = (cf_std_tail){0};
 }
 
 /* M2 and M3 share the slots of albedo, diffuse_roughness, roughness, f0. */
@@ -22,30 +20,14 @@ _Static_assert((int)CF_DIELECTRIC_F0 == (int)CF_CLEARCOAT_F0 &&
                    (int)CF_DIELECTRIC_ALBEDO == (int)CF_CLEARCOAT_ALBEDO,
                "M3 extends M2's parameter vector");
 
-/* The interface's D·V and its partials in α² and the tail: GGX's (M2, M3),
- * or STD's (M2T, docs/model.md §2.8). */
-typedef struct interface_lobe {
-  double value, d_a2, d_tail;
-} interface_lobe;
-
-CF_ALWAYS_INLINE interface_lobe dielectric_lobe(const cf_dielectric_prep *p, const cf_geometry *g,
-                                                int with_grad) {
-  cf_std_d d;
-  cf_std_v vis;
-  cf_lobe_eval(p->tailed ? &p->tail : NULL, p->a2, p->inv_a2, g->sin2_h, g->cos2_h, g->cos_i,
-               g->cos_o, with_grad, &d, &vis);
-  interface_lobe lobe;
-  lobe.value = d.value * vis.value;
-  lobe.d_a2 = d.d_a2 * vis.value + d.value * vis.d_a2;
-  lobe.d_tail = d.d_gamma * vis.value + d.value * vis.d_gamma;
-  return lobe;
-}
-
-void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
-                        double *grad, int dim) {
+/* tailed: a constant at each call, so that M2 and M3 keep GGX's code. */
+CF_ALWAYS_INLINE void dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g,
+                                      double f[3], double *grad, int dim, int tailed) {
   /* specular lobe */
   double fresnel = fresnel_schlick(p->f0, g->weight_d);
-  interface_lobe lobe = dielectric_lobe(p, g, grad != NULL);
+  /* GGX's (M2, M3) or STD's (M2T, docs/model.md §2.8 and §3.8) */
+  cf_std_dv lobe = cf_lobe_dv(tailed ? &p->tail : NULL, &p->table, p->a2, p->inv_a2, g->sin2_h,
+                              g->cos2_h, g->cos_i, g->cos_o, grad != NULL);
   double dv = lobe.value;
   double specular = fresnel * dv;
 
@@ -70,8 +52,13 @@ void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, doubl
     row[CF_DIELECTRIC_DIFFUSE_ROUGHNESS] = transmission * rho_over_pi * dq_dsigma;
     row[CF_DIELECTRIC_ROUGHNESS] = ds_dr;
     row[CF_DIELECTRIC_F0] = ds_df0 + dt_df0 * rho_over_pi * q;
-    if (p->tailed) row[CF_DIELECTRIC_TAILED_TAIL] = fresnel * lobe.d_tail;
+    if (tailed) row[CF_DIELECTRIC_TAILED_TAIL] = fresnel * lobe.d_gamma;
   }
+}
+
+void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
+                        double *grad, int dim) {
+  dielectric_eval(p, g, f, grad, dim, 0);
 }
 
 static void dielectric_prepare(const double *params, cf_prepared *prep) {
@@ -94,17 +81,17 @@ const cf_model_impl cf_dielectric_impl = {dielectric_prepare, dielectric_value,
 static void dielectric_tailed_prepare(const double *params, cf_prepared *prep) {
   cf_dielectric_prep *p = &prep->dielectric;
   cf_dielectric_prepare(params, p);
-  p->tailed = 1;
   p->tail = cf_std_tail_prepare(p->a2, params[CF_DIELECTRIC_TAILED_TAIL]);
+  cf_std_table_build(&p->table, params[CF_DIELECTRIC_TAILED_TAIL]);
 }
 
 static void dielectric_tailed_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
-  cf_dielectric_eval(&prep->dielectric, g, f, NULL, CF_DIELECTRIC_TAILED_DIM);
+  dielectric_eval(&prep->dielectric, g, f, NULL, CF_DIELECTRIC_TAILED_DIM, 1);
 }
 
 static void dielectric_tailed_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                                          double *grad) {
-  cf_dielectric_eval(&prep->dielectric, g, f, grad, CF_DIELECTRIC_TAILED_DIM);
+  dielectric_eval(&prep->dielectric, g, f, grad, CF_DIELECTRIC_TAILED_DIM, 1);
 }
 
 const cf_model_impl cf_dielectric_tailed_impl = {dielectric_tailed_prepare, dielectric_tailed_value,

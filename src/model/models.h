@@ -18,8 +18,8 @@ typedef struct cf_diffuse_prep {
 typedef struct cf_dielectric_prep {
   cf_diffuse_prep diffuse;
   double f0, a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
-  int tailed;                    /* M2T: the lobe is STD's with tail.gamma */
-  cf_std_tail tail;
+  cf_std_tail tail; /* M2T's lobe: STD's with tail.gamma and its table */
+  cf_std_table table;
 } cf_dielectric_prep;
 
 /* M3: M2 plus the coat (a = 0.1 − 0.099 gloss). */
@@ -31,8 +31,8 @@ typedef struct cf_clearcoat_prep {
 /* M4: everything that depends on the parameters only. Derivatives with
  * respect to the film's F0_1 are prefixed d_ (∂/∂F0_1). */
 typedef struct cf_clay_prep {
-  int tailed; /* M4T: both lobes are STD's, one tail */
-  cf_std_tail tail_1, tail_2;
+  cf_std_tail tail_1, tail_2; /* M4T: both lobes STD's, one tail, one table */
+  cf_std_table table;
   double rho[3];
   cf_oren_nayar_coeffs on;
   double f0_1, a2_1, inv_a2_1, da2_1; /* top interface */
@@ -51,21 +51,22 @@ typedef union cf_prepared {
   cf_clay_prep clay;
 } cf_prepared;
 
-/* One microfacet lobe's D and V with their partials: GGX's (terms.h), or
- * STD's when `tail` is not NULL (M2T, M4T; tailed.h), which at tail 2 are
- * GGX's to the bit. d_gamma is 0 for GGX. */
-CF_ALWAYS_INLINE void cf_lobe_eval(const cf_std_tail *tail, double a2, double inv_a2, double sin2_h,
-                                   double cos2_h, double c_i, double c_o, int with_grad,
-                                   cf_std_d *d, cf_std_v *v) {
-  if (!tail) {
-    cf_ggx_d gd = ggx_d(a2, inv_a2, sin2_h, cos2_h);
-    cf_smith_v gv = smith_ggx_v(a2, c_i, c_o);
-    *d = (cf_std_d){gd.value, gd.d_a2, 0.0, gd.d_sin2};
-    *v = (cf_std_v){gv.value, gv.d_a2, 0.0, gv.d_ci, gv.d_co};
-    return;
-  }
-  *d = std_d(tail, sin2_h, cos2_h);
-  *v = cf_std_v_eval(tail, c_i, c_o, with_grad);
+/* One microfacet lobe's D·V with its partials: GGX's (terms.h), or STD's
+ * with its tabulated masking when `tail` is not NULL (M2T, M4T; tailed.h),
+ * which at tail 2 is GGX's to the bit. d_gamma is 0 for GGX. */
+CF_ALWAYS_INLINE cf_std_dv cf_lobe_dv(const cf_std_tail *tail, const cf_std_table *table,
+                                      double a2, double inv_a2, double sin2_h, double cos2_h,
+                                      double c_i, double c_o, int with_grad) {
+  if (tail) return std_dv(tail, table, sin2_h, cos2_h, c_i, c_o, with_grad);
+  cf_ggx_d d = ggx_d(a2, inv_a2, sin2_h, cos2_h);
+  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
+  cf_std_dv s = {d.value * v.value, 0.0, 0.0, 0.0, 0.0, 0.0};
+  if (!with_grad) return s;
+  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
+  s.d_sin2 = d.d_sin2 * v.value;
+  s.d_ci = d.value * v.d_ci;
+  s.d_co = d.value * v.d_co;
+  return s;
 }
 
 /* value and value_grad are called for lit observations only (eval.c

@@ -141,6 +141,8 @@ cf_std_tail cf_std_tail_prepare(double a2, double gamma) {
   t.gamma = gamma;
   t.a = gamma - 1.0;
   t.b2 = t.a * a2;
+  t.inv_b2 = 1.0 / t.b2;
+  t.inv_a = 1.0 / t.a;
   if (!(gamma > CF_STD_GAMMA_MIN)) {
     t.regime = CF_STD_MASKED;
     return t;
@@ -166,9 +168,14 @@ cf_std_tail cf_std_tail_prepare(double a2, double gamma) {
  *   L = c + K (2E − c T),  E = z^a √Q / (2a − 1),  T = B_z(a, 1/2),
  * T by its continued fraction below the fraction's switch point, else as
  * B(a, 1/2) − B_(1−z)(1/2, a) = 1/K − B_(1−z)(1/2, a), where L = 2KE + cK B_(1−z)(1/2, a)
- * has no cancellation at all. */
-static cf_std_masking masking_general(const cf_std_tail *t, double c, double s2, int with_grad) {
-  cf_std_masking m = {0.0, 0.0, 0.0, 0.0};
+ * has no cancellation at all. The pieces the derivatives (and the table's
+ * mixed derivative) need: K T and K ∂T/∂a at fixed β². */
+typedef struct masking_parts {
+  double value, q, ln_z, e, kt, k_dt_da;
+} masking_parts;
+
+static masking_parts masking_parts_of(const cf_std_tail *t, double c, double s2, int with_grad) {
+  masking_parts m = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   double a = t->a, k = t->k;
   double q = s2 * t->b2 + c * c, sqrt_q = sqrt(q);
   double z = s2 * t->b2 / q, w = c * c / q; /* w = 1 − z */
@@ -177,28 +184,45 @@ static cf_std_masking masking_general(const cf_std_tail *t, double c, double s2,
   double za = exp(a * ln_z);
   double e = za * sqrt_q * t->inv_2a_m1;
   double c_over = c / sqrt_q; /* √(1 − z) */
-  double d_cf = 0.0, kt, dt_da = 0.0;
+  double d_cf = 0.0, dt_da = 0.0;
+  m.q = q;
+  m.ln_z = ln_z;
+  m.e = e;
   if (z < (a + 1.0) / (a + 2.5)) {
     double cf = cf_beta_fraction(z, a, 0.5, 1.0, 0.0, with_grad ? &d_cf : NULL, NULL);
     double tt = za * c_over * cf / a; /* B_z(a, 1/2) = z^a (1 − z)^(1/2) cf / a */
     m.value = c + k * (2.0 * e - c * tt);
-    kt = k * tt;
+    m.kt = k * tt;
     if (with_grad) dt_da = tt * (ln_z - 1.0 / a) + za * c_over * d_cf / a;
   } else {
     double cf = cf_beta_fraction(w, 0.5, a, 0.0, 1.0, with_grad ? &d_cf : NULL, NULL);
     double tail = 2.0 * c_over * za * cf; /* B_w(1/2, a) = w^(1/2) (1 − w)^a cf / (1/2) */
     m.value = 2.0 * k * e + c * k * tail;
-    kt = 1.0 - k * tail;
+    m.kt = 1.0 - k * tail;
     if (with_grad) dt_da = -t->dlnk_da / k - 2.0 * c_over * za * (ln_z * cf + d_cf);
   }
-  if (!with_grad) return m;
-  /* ∂L/∂c = 1 − K T − 2cKE/s²; ∂L/∂β² = K E/β²; ∂L/∂a at fixed β² */
-  m.d_c = 1.0 - kt - 2.0 * c * k * e / s2;
+  m.k_dt_da = k * dt_da;
+  return m;
+}
+
+/* ∂L/∂c = 1 − K T − 2cKE/s²; ∂L/∂β² = K E/β²; ∂L/∂a at fixed β² (T5) */
+static cf_std_masking masking_from_parts(const cf_std_tail *t, const masking_parts *p, double c,
+                                         double s2) {
+  cf_std_masking m = {p->value, 0.0, 0.0, 0.0};
+  double k = t->k, e = p->e;
+  m.d_c = 1.0 - p->kt - 2.0 * c * k * e / s2;
   double d_b2 = k * e / t->b2;
-  double d_a = t->dlnk_da * (m.value - c) + k * (2.0 * e * (ln_z - 2.0 * t->inv_2a_m1) - c * dt_da);
-  m.d_a2 = a * d_b2;              /* β² = a α² */
+  double d_a =
+      t->dlnk_da * (m.value - c) + 2.0 * k * e * (p->ln_z - 2.0 * t->inv_2a_m1) - c * p->k_dt_da;
+  m.d_a2 = t->a * d_b2;           /* β² = a α² */
   m.d_gamma = d_a + t->a2 * d_b2; /* a = γ − 1 */
   return m;
+}
+
+static cf_std_masking masking_general(const cf_std_tail *t, double c, double s2, int with_grad) {
+  masking_parts p = masking_parts_of(t, c, s2, with_grad);
+  if (!with_grad) return (cf_std_masking){p.value, 0.0, 0.0, 0.0};
+  return masking_from_parts(t, &p, c, s2);
 }
 
 /* docs/model.md (T8): Beckmann's masking with ν = c/(s α),
@@ -212,6 +236,12 @@ static cf_std_masking masking_beckmann(const cf_std_tail *t, double c, double s2
   m.d_a2 = 0.5 * s * e * CF_INV_SQRT_PI / alpha;
   m.d_gamma = 0.0;
   return m;
+}
+
+cf_std_masking cf_std_masking_beckmann(const cf_std_tail *t, double c) {
+  double s2 = (1.0 - c) * (1.0 + c);
+  if (!(s2 > 0.0)) return (cf_std_masking){c, 1.0, 0.0, 0.0};
+  return masking_beckmann(t, c, s2);
 }
 
 cf_std_masking cf_std_masking_eval(const cf_std_tail *t, double c, int with_grad) {
@@ -234,6 +264,81 @@ cf_std_masking cf_std_masking_eval(const cf_std_tail *t, double c, int with_grad
     return m;
   }
   return masking_general(t, c, s2, with_grad);
+}
+
+/* ---- The table's nodes (tailed.h, docs/model.md §2.8 "The table") ------- */
+
+/* octave j: 16 steps for j = 0, 8 to j = 9, 4 to 15, 2 to 25, 1 to 45 */
+const unsigned char cf_std_octave_log2_steps[CF_STD_TABLE_OCTAVES] = {
+    4, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1,
+    1, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+const unsigned char cf_std_octave_first[CF_STD_TABLE_OCTAVES + 1] = {
+    0,   16,  24,  32,  40,  48,  56,  64,  72,  80,  88,  92,  96,  100, 104, 108,
+    112, 114, 116, 118, 120, 122, 124, 126, 128, 130, 132, 133, 134, 135, 136, 137,
+    138, 139, 140, 141, 142, 143, 144, 145, 146, 147, 148, 149, 150, 151, 152};
+_Static_assert(CF_STD_TABLE_NODES == 153, "the octaves' steps add up");
+
+double cf_std_table_position(int k) {
+  int j = 0;
+  while (j < CF_STD_TABLE_OCTAVES - 1 && cf_std_octave_first[j + 1] <= k) ++j;
+  int steps = cf_std_octave_first[j + 1] - cf_std_octave_first[j], q = k - cf_std_octave_first[j];
+  return ldexp(1.0 - 0.5 * q / steps, -j); /* q = steps: 2^(−j−1) */
+}
+
+cf_std_node cf_std_node_exact(const cf_std_tail *t, double c) {
+  double s2 = (1.0 - c) * (1.0 + c);
+  masking_parts p = masking_parts_of(t, c, s2, 1);
+  cf_std_masking m = masking_from_parts(t, &p, c, s2);
+  /* ∂(∂L/∂c)/∂γ = ∂/∂a|β² + α² ∂/∂β², from ∂L/∂c = 1 − KT − 2cKE/s² with
+   *   ∂(KT)/∂a = K T dlnK/da + K ∂T/∂a,  ∂(KE)/∂a = K E (dlnK/da + ln z − 2/(2a − 1)),
+   *   ∂(∂L/∂c)/∂β² = ∂(∂L/∂β²)/∂c = −(K E/β²) c (2a/s² + (2a − 1)(1 − β²)/Q). */
+  double k = t->k, a = t->a, ke = k * p.e;
+  double dc_da = -(t->dlnk_da * p.kt + p.k_dt_da) -
+                 2.0 * c / s2 * ke * (t->dlnk_da + p.ln_z - 2.0 * t->inv_2a_m1);
+  double dc_db2 = -ke / t->b2 * c * (2.0 * a / s2 + (2.0 * a - 1.0) * (1.0 - t->b2) / p.q);
+  cf_std_node n = {m.value, m.d_c, m.d_gamma, dc_da + t->a2 * dc_db2};
+  return n;
+}
+
+void cf_std_table_nodes_exact(cf_std_node node[CF_STD_TABLE_NODES], double gamma) {
+  cf_std_tail t = cf_std_tail_prepare(1.0, gamma);
+  t.regime = CF_STD_GENERAL; /* at γ = 2 too: the nodes' ∂/∂γ */
+  for (int k = 0; k < CF_STD_TABLE_NODES; ++k) {
+    cf_std_node n = cf_std_node_exact(&t, 1.0 - cf_std_table_position(k)); /* u, exact */
+    n.g_y = -n.g_y; /* ∂/∂y = −∂/∂u */
+    n.g_y_gamma = -n.g_y_gamma;
+    node[k] = n;
+  }
+}
+
+/* Hermite to power series on each step: with m = h ∂g/∂y at the ends,
+ * g = p0 + m0 t + (3(p1 − p0) − 2 m0 − m1) t² + (2(p0 − p1) + m0 + m1) t³. */
+static void power_series(double p0, double m0, double p1, double m1, double *c) {
+  c[0] = p0;
+  c[1] = m0;
+  c[2] = 3.0 * (p1 - p0) - 2.0 * m0 - m1;
+  c[3] = 2.0 * (p0 - p1) + m0 + m1;
+}
+
+void cf_std_table_from_nodes(cf_std_table *tb, const cf_std_node node[CF_STD_TABLE_NODES]) {
+  for (int j = 0; j < CF_STD_TABLE_OCTAVES; ++j) {
+    double h = ldexp(1.0, -j - 1 - cf_std_octave_log2_steps[j]);
+    for (int s = cf_std_octave_first[j]; s < cf_std_octave_first[j + 1]; ++s) {
+      const cf_std_node *a = &node[s + 1], *b = &node[s]; /* t = 0 at node s + 1 */
+      power_series(a->g, h * a->g_y, b->g, h * b->g_y, tb->step[s].c);
+      power_series(a->g_gamma, h * a->g_y_gamma, b->g_gamma, h * b->g_y_gamma, tb->step[s].d);
+    }
+  }
+}
+
+void cf_std_table_build_exact(cf_std_table *tb, double gamma) {
+  cf_std_tail t = cf_std_tail_prepare(1.0, gamma);
+  tb->gamma = gamma;
+  tb->built = t.regime == CF_STD_GENERAL || t.regime == CF_STD_GGX;
+  if (!tb->built) return;
+  cf_std_node node[CF_STD_TABLE_NODES];
+  cf_std_table_nodes_exact(node, gamma);
+  cf_std_table_from_nodes(tb, node);
 }
 
 double cf_std_lambda(const cf_std_tail *t, double c) {
@@ -288,5 +393,27 @@ cf_std_lobe cf_std_lobe_eval(const cf_std_tail *t, double f0, double weight_d, d
   s.d_sin2 = fresnel * d.d_sin2 * vis.value;
   s.d_ci = fresnel * d.value * vis.d_ci;
   s.d_co = fresnel * d.value * vis.d_co;
+  return s;
+}
+
+/* ---- The lobe for the models, out of line -------------------------------- */
+
+cf_std_dv cf_std_dv_eval(const cf_std_tail *t, const cf_std_table *tb, double sin2_h, double cos2_h,
+                         double c_i, double c_o, int with_grad) {
+  return with_grad ? std_dv(t, tb, sin2_h, cos2_h, c_i, c_o, 1)
+                   : std_dv(t, tb, sin2_h, cos2_h, c_i, c_o, 0);
+}
+
+cf_std_dv cf_ggx_dv_eval(double a2, double sin2_h, double cos2_h, double c_i, double c_o,
+                         int with_grad) {
+  cf_std_dv s = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  cf_ggx_d d = ggx_d(a2, 1.0 / a2, sin2_h, cos2_h);
+  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
+  s.value = d.value * v.value;
+  if (!with_grad) return s;
+  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
+  s.d_sin2 = d.d_sin2 * v.value;
+  s.d_ci = d.value * v.d_ci;
+  s.d_co = d.value * v.d_co;
   return s;
 }
