@@ -29,7 +29,7 @@ int main(void) {
   CHECK(cf_param_info_get(CF_PARAM_OPTICAL_DEPTH)->upper == 8.0, "tau bound");
   CHECK(cf_param_info_get(CF_PARAM_DIFFUSE_ROUGHNESS)->upper == 1.2, "sigma bound");
 
-  static const int dims[CF_MODEL_COUNT] = {3, 4, 6, 8, 11};
+  static const int dims[CF_MODEL_COUNT] = {3, 4, 6, 8, 11, 7, 12};
   for (int m = 0; m < CF_MODEL_COUNT; ++m) {
     const cf_model_info *model = cf_model_info_get((cf_model_id)m);
     CHECK(model->dim == dims[m], "%s dim %d", model->code, model->dim);

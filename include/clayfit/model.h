@@ -97,7 +97,10 @@ extern "C" {
     "perceptual GGX roughness of the clay surface under the film")            \
   X(BASE_F0, "base_f0", "F0_2", 1, "1", 0.004, 0.0, 0.25,                      \
     "normal-incidence reflectance of the film-to-clay interface "             \
-    "(clay under water about 0.004)")
+    "(clay under water about 0.004)")                                          \
+  X(TAIL, "tail", "gamma", 1, "1", 2.0, 1.6, 100.0,                            \
+    "tail of the STD microfacet lobes (2 = GGX; lower = longer tail, "        \
+    "large = Beckmann)")
 
 /* clang-format on */
 
@@ -131,17 +134,32 @@ enum {
   P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, FILM_ROUGHNESS) P(M, FILM_F0)  \
   P(M, OPTICAL_DEPTH) P(M, BASE_ROUGHNESS) P(M, BASE_F0)
 
+/* A tailed twin's vector is its GGX twin's followed by the tail, so every
+ * slot constant of the twin holds in it (param_table.c checks). */
+#define CF_PARAMS_DIELECTRIC_TAILED(P, M) \
+  P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, ROUGHNESS) P(M, F0) P(M, TAIL)
+#define CF_PARAMS_CLAY_TAILED(P, M)                                        \
+  P(M, ALBEDO) P(M, DIFFUSE_ROUGHNESS) P(M, FILM_ROUGHNESS) P(M, FILM_F0)  \
+  P(M, OPTICAL_DEPTH) P(M, BASE_ROUGHNESS) P(M, BASE_F0) P(M, TAIL)
+
+/* X(ID, code, name, params list, GGX twin, summary); the GGX twin is the
+ * model itself for a model without a tail. */
 #define CF_MODEL_MAP(X)                                                      \
-  X(LAMBERT, "M0", "lambert", CF_PARAMS_LAMBERT,                             \
+  X(LAMBERT, "M0", "lambert", CF_PARAMS_LAMBERT, LAMBERT,                    \
     "Lambertian diffuse: f = rho/pi")                                        \
-  X(OREN_NAYAR, "M1", "oren_nayar", CF_PARAMS_OREN_NAYAR,                    \
+  X(OREN_NAYAR, "M1", "oren_nayar", CF_PARAMS_OREN_NAYAR, OREN_NAYAR,        \
     "Oren-Nayar qualitative diffuse (rough matte clay)")                     \
-  X(DIELECTRIC, "M2", "dielectric", CF_PARAMS_DIELECTRIC,                    \
+  X(DIELECTRIC, "M2", "dielectric", CF_PARAMS_DIELECTRIC, DIELECTRIC,        \
     "GGX specular interface over Oren-Nayar diffuse (dry or glazed clay)")   \
-  X(CLEARCOAT, "M3", "clearcoat", CF_PARAMS_CLEARCOAT,                       \
+  X(CLEARCOAT, "M3", "clearcoat", CF_PARAMS_CLEARCOAT, CLEARCOAT,            \
     "M2 plus Burley's GTR1 clear-coat lobe (Burley 2012)")                   \
-  X(CLAY, "M4", "clay", CF_PARAMS_CLAY,                                      \
-    "absorbing GGX film (water/oil) over a GGX + Oren-Nayar clay body")
+  X(CLAY, "M4", "clay", CF_PARAMS_CLAY, CLAY,                                \
+    "absorbing GGX film (water/oil) over a GGX + Oren-Nayar clay body")      \
+  X(DIELECTRIC_TAILED, "M2T", "dielectric_tailed",                           \
+    CF_PARAMS_DIELECTRIC_TAILED, DIELECTRIC,                                 \
+    "M2 with a free tail: an STD specular lobe (tail 2 = M2)")               \
+  X(CLAY_TAILED, "M4T", "clay_tailed", CF_PARAMS_CLAY_TAILED, CLAY,          \
+    "M4 with one free tail shared by its film and base lobes (tail 2 = M4)")
 
 /* clang-format on */
 
@@ -156,12 +174,13 @@ typedef enum cf_model_id {
  * MODEL's vector, CF_<MODEL>_DIM the vector's length. */
 #define CF__SLOT(MODEL, ID) \
   CF_##MODEL##_##ID, CF__##MODEL##_##ID##_LAST = CF_##MODEL##_##ID + CF_NCOMP_##ID - 1,
-#define CF__SLOT_ENUM(ID, code, name, PARAMS, summary) enum { PARAMS(CF__SLOT, ID) CF_##ID##_DIM };
+#define CF__SLOT_ENUM(ID, code, name, PARAMS, twin, summary) \
+  enum { PARAMS(CF__SLOT, ID) CF_##ID##_DIM };
 CF_MODEL_MAP(CF__SLOT_ENUM)
 #undef CF__SLOT_ENUM
 
 /* The largest parameter vector of any model. */
-#define CF_MAX_DIM CF_CLAY_DIM
+#define CF_MAX_DIM CF_CLAY_TAILED_DIM
 
 typedef struct cf_param_info {
   cf_param_id id;
@@ -183,11 +202,18 @@ typedef struct cf_model_info {
   const cf_param_id *params; /* in vector order */
   const int *offsets;        /* first vector slot of each parameter */
   int dim;                   /* length of the parameter vector */
+  cf_model_id ggx_twin;      /* the model without the tail (itself if it has none) */
+  int tail_slot;             /* the tail's slot, −1 for a GGX model */
 } cf_model_info;
 
 /* Table look-ups. Return NULL for an id outside the table. */
 const cf_param_info *cf_param_info_get(cf_param_id id);
 const cf_model_info *cf_model_info_get(cf_model_id id);
+
+/* Every model's code ("M0", ...) and name ("lambert", ...), in id order,
+ * NULL-terminated: index k is model id k. */
+const char *const *cf_model_codes(void);
+const char *const *cf_model_names(void);
 
 /* Find a model by code or name, case-insensitive ("M4", "m4", "clay").
  * Returns CF_ENOTFOUND (with a message listing the models) if unknown. */

@@ -63,7 +63,7 @@ cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *
     json_object_set_new(params, info->name, param_json(r, info, m->offsets[j]));
   }
   json_t *derived = json_null();
-  if (r->model == CF_MODEL_CLAY)
+  if (m->ggx_twin == CF_MODEL_CLAY) /* M4, M4T */
     derived = json_pack("{s:f, s:o, s:s}", "density", fit->density, "absorption",
                         isfinite(fit->absorption[0]) ? numbers(fit->absorption, 3) : json_null(),
                         "convention", fit->density_convention);
@@ -135,9 +135,7 @@ static cf_status read_preset(const json_t *root, const char *path, cf_model_id *
   json_at mh = json_member_at(&at, "model");
   static const char *const mkeys[] = {"code", "name", NULL};
   TRY(json_check_keys(obj, &mh, mkeys, err));
-  static const char *const codes[] = {"M0", "M1", "M2", "M3", "M4", NULL};
-  static const char *const names[] = {"lambert",   "oren_nayar", "dielectric",
-                                      "clearcoat", "clay",       NULL};
+  const char *const *codes = cf_model_codes(), *const *names = cf_model_names();
   int code, name;
   TRY(json_get_choice(obj, &mh, "code", 1, codes, &code, NULL, err));
   TRY(json_get_choice(obj, &mh, "name", 1, names, &name, NULL, err));

@@ -43,7 +43,8 @@ static cf_status base_contribution(fit_problem *p, double *chi2, cf_error *err) 
 cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_options *o, double cost,
                                fit_hidden_base *out, cf_error *err) {
   memset(out, 0, sizeof *out);
-  if (p->model != CF_MODEL_CLAY) return CF_OK;
+  /* M4 and M4T (whose vector starts with M4's) */
+  if (cf_model_info_get(p->model)->ggx_twin != CF_MODEL_CLAY) return CF_OK;
   for (int k = 0; k < CF_CLAY_DIM; ++k) out->slots += is_base_slot(k) && is_free(plan->status[k]);
   if (out->slots == 0) return CF_OK;
   size_t n = 3 * p->count;
@@ -74,7 +75,7 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   memcpy(log_light, p->log_light, p->light_count * sizeof *log_light);
   fit_plan alone = *plan;
   double defaults[CF_MAX_DIM];
-  cf_model_default_params(CF_MODEL_CLAY, defaults);
+  cf_model_default_params(p->model, defaults);
   double tau_upper = cf_param_info_get(CF_PARAM_OPTICAL_DEPTH)->upper;
   for (int k = 0; k < CF_CLAY_DIM; ++k) {
     if (!is_base_slot(k) || !is_free(plan->status[k])) continue;

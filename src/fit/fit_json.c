@@ -59,7 +59,7 @@ static json_t *params_json(const cf_fit_result *r) {
 /* Density and absorption of M4's film under docs/model.md §3.6's convention: only
  * their product τ is observable. */
 static json_t *derived_json(const cf_fit_result *r, double density) {
-  if (r->model != CF_MODEL_CLAY) return json_null();
+  if (cf_model_info_get(r->model)->ggx_twin != CF_MODEL_CLAY) return json_null(); /* M4, M4T */
   const double *tau = r->params + CF_CLAY_OPTICAL_DEPTH;
   double mean = (tau[0] + tau[1] + tau[2]) / 3.0;
   double absorption[3];
@@ -211,11 +211,10 @@ static json_t *per_image_json(const cf_fit_report *rep) {
   const cf_fit_result *r = rep->result;
   json_t *per_image = json_array();
   for (size_t k = 0; k < r->images; ++k) {
-    json_t *image =
-        json_pack("{s:s, s:f, s:f, s:f, s:I}", "name", cf_capture_image_at(rep->capture, k)->name,
-                  "rmse", r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure",
-                  r->exposures[k], "not_radiance",
-                  (json_int_t)cf_capture_image_at(rep->capture, k)->not_radiance);
+    json_t *image = json_pack(
+        "{s:s, s:f, s:f, s:f, s:I}", "name", cf_capture_image_at(rep->capture, k)->name, "rmse",
+        r->image_rmse[k], "relative_rmse", r->image_relative_rmse[k], "exposure", r->exposures[k],
+        "not_radiance", (json_int_t)cf_capture_image_at(rep->capture, k)->not_radiance);
     if (r->exposure_sd) json_object_set_new(image, "exposure_sd", json_real(r->exposure_sd[k]));
     if (r->white_balance_fitted && r->white_balance && r->white_balance_sd) {
       json_object_set_new(image, "white_balance", numbers(r->white_balance + 3 * k, 3));
@@ -297,7 +296,8 @@ static json_t *response_json(const cf_fit_result *r) {
       "the camera response R: the decoded photo values are modelled as R(scale x exposure x "
       "radiance), log R a function of log x whose slope is linear between the knots (x = 1, "
       "1/3, 1/9, ...; the slopes given) and constant beyond, R(1) = 1; fitted when the capture "
-      "says the tone curve is unknown, else the identity (every slope 1). The curve gives, for decoded "
+      "says the tone curve is unknown, else the identity (every slope 1). The curve gives, for "
+      "decoded "
       "values y, the linear value x = R^-1(y) and its sd from the slopes' covariance");
 }
 

@@ -318,7 +318,8 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
   for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan->status[k] != CF_PARAM_FITTED;
   /* M3 and M4 start from the fitted M2 */
   double m2[CF_MAX_DIM];
-  int warm = o->multistart && (o->model == CF_MODEL_CLAY || o->model == CF_MODEL_CLEARCOAT);
+  cf_model_id twin = cf_model_info_get(o->model)->ggx_twin;
+  int warm = o->multistart && (twin == CF_MODEL_CLAY || twin == CF_MODEL_CLEARCOAT);
   if (warm && s == CF_OK) s = warm_dielectric(capture, o, &sample, m2, err);
   double starts[CF_FIT_MAX_STARTS][CF_MAX_DIM], log_scales[CF_FIT_MAX_STARTS];
   int count = s == CF_OK && o->multistart

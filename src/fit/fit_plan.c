@@ -11,7 +11,9 @@
 /* The interface F0 that fixes the absolute scale of a capture whose lights
  * are known only up to a factor (docs/model.md §5.5), or −1. */
 int fit_scale_slot(cf_model_id model) {
-  switch (model) {
+  const cf_model_info *info = cf_model_info_get(model);
+  if (!info) return -1;
+  switch (info->ggx_twin) { /* a tailed twin's vector starts with its twin's */
     case CF_MODEL_DIELECTRIC:
       return CF_DIELECTRIC_F0;
     case CF_MODEL_CLEARCOAT:

@@ -201,9 +201,7 @@ static cf_status read_model(const json_t *root, const json_at *at, const char *k
   json_at here = json_member_at(at, key);
   static const char *const known[] = {"code", "name", NULL};
   TRY(json_check_keys(obj, &here, known, err));
-  static const char *const codes[] = {"M0", "M1", "M2", "M3", "M4", NULL};
-  static const char *const names[] = {"lambert",   "oren_nayar", "dielectric",
-                                      "clearcoat", "clay",       NULL};
+  const char *const *codes = cf_model_codes(), *const *names = cf_model_names();
   int code, name;
   TRY(json_get_choice(obj, &here, "code", 1, codes, &code, NULL, err));
   TRY(json_get_choice(obj, &here, "name", 1, names, &name, NULL, err));
@@ -284,15 +282,16 @@ static cf_status read_derived(const json_t *root, const json_at *at, cf_fit_file
   f->density = NAN;
   for (int c = 0; c < 3; ++c) f->absorption[c] = NAN;
   if (json_is_null(obj)) {
-    if (f->result.model == CF_MODEL_CLAY)
-      return json_fail(&here, err, CF_EPARSE, "model M4 needs the film's density and absorption");
+    if (cf_model_info_get(f->result.model)->ggx_twin == CF_MODEL_CLAY)
+      return json_fail(&here, err, CF_EPARSE,
+                       "models M4 and M4T need the film's density and absorption");
     return CF_OK;
   }
   if (!json_is_object(obj))
     return json_fail(&here, err, CF_EPARSE, "expected an object or null, got %s",
                      json_type_name(obj));
-  if (f->result.model != CF_MODEL_CLAY)
-    return json_fail(&here, err, CF_EPARSE, "must be null for a model other than M4");
+  if (cf_model_info_get(f->result.model)->ggx_twin != CF_MODEL_CLAY)
+    return json_fail(&here, err, CF_EPARSE, "must be null for a model other than M4 and M4T");
   static const char *const known[] = {"density", "convention", "absorption", NULL};
   TRY(json_check_keys(obj, &here, known, err));
   TRY(get_nonneg(obj, &here, "density", &f->density, err));
@@ -799,7 +798,7 @@ static cf_status read_candidate(const json_t *item, const json_at *e, cf_error *
   if (!json_is_object(item))
     return json_fail(e, err, CF_EPARSE, "expected an object, got %s", json_type_name(item));
   cf_model_id model;
-  static const char *const codes[] = {"M0", "M1", "M2", "M3", "M4", NULL};
+  const char *const *codes = cf_model_codes();
   int code, ok, chosen;
   TRY(json_get_choice(item, e, "model", 1, codes, &code, NULL, err));
   model = (cf_model_id)code;
@@ -861,7 +860,7 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
   TRY(json_get_object(root, at, "choice", 1, &obj, NULL, err));
   json_at here = json_member_at(at, "choice");
   static const char *const modes[] = {"forced", "auto", NULL};
-  static const char *const codes[] = {"M0", "M1", "M2", "M3", "M4", NULL};
+  const char *const *codes = cf_model_codes();
   int mode, chosen;
   TRY(json_get_choice(obj, &here, "mode", 1, modes, &mode, NULL, err));
   TRY(json_get_choice(obj, &here, "chosen", 1, codes, &chosen, NULL, err));

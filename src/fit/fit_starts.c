@@ -71,6 +71,11 @@ static int clearcoat_from_dielectric(const double *base, const int *held, const 
 
 int fit_starts(cf_model_id model, const double *base, const int *held, const double *warm,
                double (*starts)[CF_MAX_DIM], int max) {
+  /* a tailed twin starts as its GGX twin, the tail at base's value (GGX's 2
+   * unless given): the tail's gradient there is not 0, and the solve moves it */
+  const cf_model_info *info = cf_model_info_get(model);
+  if (info && info->tail_slot >= 0)
+    return fit_starts(info->ggx_twin, base, held, warm, starts, max);
   if (warm && model == CF_MODEL_CLAY) return clay_from_dielectric(base, held, warm, starts, max);
   if (warm && model == CF_MODEL_CLEARCOAT)
     return clearcoat_from_dielectric(base, held, warm, starts, max);

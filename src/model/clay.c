@@ -14,8 +14,6 @@
  * and the base needs no vectors. */
 #include "models.h"
 
-enum { DIM = CF_CLAY_DIM };
-
 static void clay_prepare(const double *params, cf_prepared *prep) {
   cf_clay_prep *p = &prep->clay;
   double sigma = params[CF_CLAY_DIFFUSE_ROUGHNESS];
@@ -83,15 +81,17 @@ static inline refracted_cos refract_cos(const cf_clay_prep *p, double c) {
   return r;
 }
 
+/* grad: rows of length dim (M4's 11, M4T's 12 with the tail last); tailed:
+ * a constant at each call (M4T), so that M4 keeps GGX's code. */
 CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
-                                double *grad, cf_clay_terms *terms) {
+                                double *grad, int dim, int tailed, cf_clay_terms *terms) {
   const double c_i = g->cos_i, c_o = g->cos_o;
 
   /* step 8, first term: the film's top specular, in air */
   cf_fresnel fresnel_1 = fresnel_dielectric(&p->eta_1, g->c_d, fresnel_root(&p->eta_1, g->c_d));
-  cf_ggx_d d1 = ggx_d(p->a2_1, p->inv_a2_1, g->sin2_h, g->cos2_h);
-  cf_smith_v v1 = smith_ggx_v(p->a2_1, c_i, c_o);
-  double top = fresnel_1.value * d1.value * v1.value;
+  cf_std_dv s1 = cf_lobe_dv(tailed ? &p->tail_1 : NULL, &p->table, p->a2_1, p->inv_a2_1,
+                            g->sin2_h, g->cos2_h, c_i, c_o, grad != NULL);
+  double top = fresnel_1.value * s1.value;
 
   /* steps 2-3: the refracted pair's invariants */
   refracted_cos ri = refract_cos(p, c_i), ro = refract_cos(p, c_o);
@@ -111,9 +111,9 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   /* step 7: the base's specular and diffuse lobes, in the film */
   const cf_fresnel_eta *e2 = &p->eta_2;
   cf_fresnel fresnel_2 = fresnel_dielectric(e2, hb.c_d, fresnel_root(e2, hb.c_d));
-  cf_ggx_d d2 = ggx_d(p->a2_2, p->inv_a2_2, hb.sin2_h, hb.cos2_h);
-  cf_smith_v v2 = smith_ggx_v(p->a2_2, ri.c, ro.c);
-  double base_specular = fresnel_2.value * d2.value * v2.value;
+  cf_std_dv s2 = cf_lobe_dv(tailed ? &p->tail_2 : NULL, &p->table, p->a2_2, p->inv_a2_2,
+                            hb.sin2_h, hb.cos2_h, ri.c, ro.c, grad != NULL);
+  double base_specular = fresnel_2.value * s2.value;
   cf_fresnel f2_i = fresnel_dielectric(e2, ri.c, fresnel_root(e2, ri.c));
   cf_fresnel f2_o = fresnel_dielectric(e2, ro.c, fresnel_root(e2, ro.c));
   double t2_i = f2_i.transmission, t2_o = f2_o.transmission;
@@ -145,8 +145,8 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
 
   /* ---- derivatives ---- */
   /* top lobe */
-  double dtop_dr1 = fresnel_1.value * (d1.d_a2 * v1.value + d1.value * v1.d_a2) * p->da2_1;
-  double dtop_df0_1 = fresnel_1.d_f0 * d1.value * v1.value;
+  double dtop_dr1 = fresnel_1.value * s1.d_a2 * p->da2_1;
+  double dtop_df0_1 = fresnel_1.d_f0 * s1.value;
   double dtransmission = -(f1_i.d_f0 * t1_o + t1_i * f1_o.d_f0);
 
   /* ∂/∂F0_1 of the refracted invariants */
@@ -160,11 +160,14 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double d_c_d_b = 0.5 * d_s_sq_b * hb.c_d * hb.inv_s_sq;
 
   /* base specular: through F(c_d'), D(sin²θ_h') and V(c_i', c_o') */
-  double dbase_spec_df0_1 = fresnel_2.d_c * d_c_d_b * d2.value * v2.value +
-                            fresnel_2.value * d2.d_sin2 * d_sin2_b * v2.value +
-                            fresnel_2.value * d2.value * (v2.d_ci * ri.d_c + v2.d_co * ro.d_c);
-  double dbase_spec_dr2 = fresnel_2.value * (d2.d_a2 * v2.value + d2.value * v2.d_a2) * p->da2_2;
-  double dbase_spec_df0_2 = fresnel_2.d_f0 * d2.value * v2.value;
+  double dbase_spec_df0_1 = fresnel_2.d_c * d_c_d_b * s2.value +
+                            fresnel_2.value * s2.d_sin2 * d_sin2_b +
+                            fresnel_2.value * (s2.d_ci * ri.d_c + s2.d_co * ro.d_c);
+  double dbase_spec_dr2 = fresnel_2.value * s2.d_a2 * p->da2_2;
+  double dbase_spec_df0_2 = fresnel_2.d_f0 * s2.value;
+  /* the one tail of both lobes (M4T) */
+  double dtop_dtail = fresnel_1.value * s1.d_gamma;
+  double dbase_spec_dtail = fresnel_2.value * s2.d_gamma;
 
   /* base diffuse: transmissions into the clay, and the angular factor */
   double dtransmission_b_df0_1 = -(f2_i.d_c * ri.d_c * t2_o + t2_i * f2_o.d_c * ro.d_c);
@@ -179,7 +182,7 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double ddiffuse_unit_df0_1 = dtransmission_b_df0_1 * on + transmission_b * don_df0_1;
   double dphi_unit_df0_1 = dtransmission * p->inv_eta2 + transmission * p->d_inv_eta2;
   for (int c = 0; c < 3; ++c) {
-    double *row = grad + c * DIM;
+    double *row = grad + c * dim;
     double k = p->k[c], k_rho = k * p->rho[c];
     double diffuse_b = diffuse_unit * p->rho[c]; /* K-free base diffuse */
     double dphi_df0_1 = absorption[c] * (dphi_unit_df0_1 - phi_unit * p->tau[c] * d_path);
@@ -194,19 +197,20 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
     row[CF_CLAY_OPTICAL_DEPTH + c] = phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
     row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
     row[CF_CLAY_BASE_F0] = phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
+    if (tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi[c] * dbase_spec_dtail;
   }
 }
 
 static void clay_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
-  clay_eval(&prep->clay, g, f, NULL, NULL);
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_DIM, 0, NULL);
 }
 
 static void clay_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
                             double *grad) {
   /* clay_eval writes every entry but the other channels' RGB ones */
-  cf_zero_other_channels(grad, DIM, CF_CLAY_ALBEDO);
-  cf_zero_other_channels(grad, DIM, CF_CLAY_OPTICAL_DEPTH);
-  clay_eval(&prep->clay, g, f, grad, NULL);
+  cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_ALBEDO);
+  cf_zero_other_channels(grad, CF_CLAY_DIM, CF_CLAY_OPTICAL_DEPTH);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_DIM, 0, NULL);
 }
 
 void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_terms *terms) {
@@ -215,7 +219,31 @@ void cf_clay_terms_eval(const double *params, const cf_geometry *g, cf_clay_term
   cf_prepared prep;
   clay_prepare(params, &prep);
   double f[3];
-  clay_eval(&prep.clay, g, f, NULL, terms);
+  clay_eval(&prep.clay, g, f, NULL, CF_CLAY_DIM, 0, terms);
 }
 
 const cf_model_impl cf_clay_impl = {clay_prepare, clay_value, clay_value_grad};
+
+/* M4T: M4's vector plus one tail for both lobes (model.h). */
+static void clay_tailed_prepare(const double *params, cf_prepared *prep) {
+  clay_prepare(params, prep);
+  cf_clay_prep *p = &prep->clay;
+  double gamma = params[CF_CLAY_TAILED_TAIL];
+  p->tail_1 = cf_std_tail_prepare(p->a2_1, gamma);
+  p->tail_2 = cf_std_tail_prepare(p->a2_2, gamma);
+  cf_std_table_build(&p->table, gamma); /* the masking of both lobes (one tail) */
+}
+
+static void clay_tailed_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {
+  clay_eval(&prep->clay, g, f, NULL, CF_CLAY_TAILED_DIM, 1, NULL);
+}
+
+static void clay_tailed_value_grad(const cf_prepared *prep, const cf_geometry *g, double f[3],
+                                   double *grad) {
+  cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_ALBEDO);
+  cf_zero_other_channels(grad, CF_CLAY_TAILED_DIM, CF_CLAY_OPTICAL_DEPTH);
+  clay_eval(&prep->clay, g, f, grad, CF_CLAY_TAILED_DIM, 1, NULL);
+}
+
+const cf_model_impl cf_clay_tailed_impl = {clay_tailed_prepare, clay_tailed_value,
+                                           clay_tailed_value_grad};

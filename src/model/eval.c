@@ -10,6 +10,8 @@ static const cf_model_impl *const impls[CF_MODEL_COUNT] = {
     [CF_MODEL_DIELECTRIC] = &cf_dielectric_impl,
     [CF_MODEL_CLEARCOAT] = &cf_clearcoat_impl,
     [CF_MODEL_CLAY] = &cf_clay_impl,
+    [CF_MODEL_DIELECTRIC_TAILED] = &cf_dielectric_tailed_impl,
+    [CF_MODEL_CLAY_TAILED] = &cf_clay_tailed_impl,
 };
 
 static const cf_model_impl *impl_of(cf_model_id model) {

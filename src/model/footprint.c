@@ -11,7 +11,11 @@ static double gtr1_width(double gloss) {
 }
 
 double cf_model_lobe_width(cf_model_id model, const double *params) {
-  switch (model) {
+  const cf_model_info *info = cf_model_info_get(model);
+  if (!info) return INFINITY;
+  /* a tailed twin's vector starts with its GGX twin's; its lobe's α is the
+   * GGX one's, and the tail widens the lobe's flanks, not its peak */
+  switch (info->ggx_twin) {
     case CF_MODEL_LAMBERT:
     case CF_MODEL_OREN_NAYAR:
       return INFINITY;
@@ -33,7 +37,7 @@ double cf_model_lobe_width(cf_model_id model, const double *params) {
       double r1 = params[CF_CLAY_FILM_ROUGHNESS], r2 = params[CF_CLAY_BASE_ROUGHNESS];
       return fmin(r1 * r1, r2 * r2);
     }
-    case CF_MODEL_COUNT:
+    default:
       break;
   }
   return INFINITY;

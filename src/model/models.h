@@ -5,6 +5,7 @@
 #define CLAYFIT_MODEL_MODELS_H
 
 #include "clayfit/model.h"
+#include "tailed.h"
 #include "terms.h"
 
 /* M0 and the diffuse part of M1-M3: ρ/π and the Oren-Nayar coefficients. */
@@ -13,11 +14,13 @@ typedef struct cf_diffuse_prep {
   cf_oren_nayar_coeffs on;
 } cf_diffuse_prep;
 
-/* M2: the diffuse prep plus the specular interface. */
+/* M2 (and M2T): the diffuse prep plus the specular interface. */
 typedef struct cf_dielectric_prep {
   cf_diffuse_prep diffuse;
   cf_fresnel_eta eta;        /* the interface's η² − 1 from F0 (7) */
   double a2, inv_a2, da2_dr; /* α² = r⁴, 1/α², ∂α²/∂r = 4 r³ */
+  cf_std_tail tail;          /* M2T's lobe: STD's with tail.gamma and its table */
+  cf_std_table table;
 } cf_dielectric_prep;
 
 /* M3: M2 plus the coat (a = 0.1 − 0.099 gloss). */
@@ -29,6 +32,8 @@ typedef struct cf_clearcoat_prep {
 /* M4: everything that depends on the parameters only. Derivatives with
  * respect to the film's F0_1 are prefixed d_ (∂/∂F0_1). */
 typedef struct cf_clay_prep {
+  cf_std_tail tail_1, tail_2; /* M4T: both lobes STD's, one tail, one table */
+  cf_std_table table;
   double rho[3];
   cf_oren_nayar_coeffs on;
   cf_fresnel_eta eta_1; /* top interface: η1² − 1 from F0_1 */
@@ -48,6 +53,24 @@ typedef union cf_prepared {
   cf_clay_prep clay;
 } cf_prepared;
 
+/* One microfacet lobe's D·V with its partials: GGX's (terms.h), or STD's
+ * with its tabulated masking when `tail` is not NULL (M2T, M4T; tailed.h),
+ * which at tail 2 is GGX's to the bit. d_gamma is 0 for GGX. */
+CF_ALWAYS_INLINE cf_std_dv cf_lobe_dv(const cf_std_tail *tail, const cf_std_table *table,
+                                      double a2, double inv_a2, double sin2_h, double cos2_h,
+                                      double c_i, double c_o, int with_grad) {
+  if (tail) return std_dv(tail, table, sin2_h, cos2_h, c_i, c_o, with_grad);
+  cf_ggx_d d = ggx_d(a2, inv_a2, sin2_h, cos2_h);
+  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
+  cf_std_dv s = {d.value * v.value, 0.0, 0.0, 0.0, 0.0, 0.0};
+  if (!with_grad) return s;
+  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
+  s.d_sin2 = d.d_sin2 * v.value;
+  s.d_ci = d.value * v.d_ci;
+  s.d_co = d.value * v.d_co;
+  return s;
+}
+
 /* value and value_grad are called for lit observations only (eval.c
  * answers the others); value_grad writes every entry of its 3 × dim
  * channel-major gradient (model.h). */
@@ -62,13 +85,16 @@ extern const cf_model_impl cf_oren_nayar_impl;
 extern const cf_model_impl cf_dielectric_impl;
 extern const cf_model_impl cf_clearcoat_impl;
 extern const cf_model_impl cf_clay_impl;
+extern const cf_model_impl cf_dielectric_tailed_impl;
+extern const cf_model_impl cf_clay_tailed_impl;
 
 /* Shared preparation of the diffuse body and the M2 interface (M1-M3). */
 void cf_diffuse_prepare(const double *rho, double sigma, cf_diffuse_prep *p);
 void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 
 /* M2 with its gradient written into rows of length `dim` (M3 reuses it
- * with dim 8, and writes its own two entries); grad may be NULL. */
+ * with dim 8, and writes its own two entries; M2T with 7, the tail last);
+ * grad may be NULL. */
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim);
 

@@ -17,7 +17,7 @@ static const cf_param_info param_table[CF_PARAM_COUNT] = {
 /* Per model: its parameter ids and their first slots, in vector order. */
 #define CF__LIST_ID(M, ID) CF_PARAM_##ID,
 #define CF__LIST_SLOT(M, ID) CF_##M##_##ID,
-#define CF__MODEL_LISTS(ID, code, name, PARAMS, summary)              \
+#define CF__MODEL_LISTS(ID, code, name, PARAMS, twin, summary)        \
   static const cf_param_id ID##_params[] = {PARAMS(CF__LIST_ID, ID)}; \
   static const int ID##_offsets[] = {PARAMS(CF__LIST_SLOT, ID)};
 CF_MODEL_MAP(CF__MODEL_LISTS)
@@ -26,18 +26,56 @@ CF_MODEL_MAP(CF__MODEL_LISTS)
 #undef CF__LIST_SLOT
 
 static const cf_model_info model_table[CF_MODEL_COUNT] = {
-#define CF__MODEL_ROW(ID, code, name, PARAMS, summary) \
-  {CF_MODEL_##ID,                                      \
-   code,                                               \
-   name,                                               \
-   summary,                                            \
-   (int)(sizeof ID##_params / sizeof ID##_params[0]),  \
-   ID##_params,                                        \
-   ID##_offsets,                                       \
-   CF_##ID##_DIM},
+#define CF__MODEL_ROW(ID, code, name, PARAMS, twin, summary) \
+  {CF_MODEL_##ID,                                            \
+   code,                                                     \
+   name,                                                     \
+   summary,                                                  \
+   (int)(sizeof ID##_params / sizeof ID##_params[0]),        \
+   ID##_params,                                              \
+   ID##_offsets,                                             \
+   CF_##ID##_DIM,                                            \
+   CF_MODEL_##twin,                                          \
+   CF_MODEL_##ID == CF_MODEL_##twin ? -1 : (int)CF_##twin##_DIM},
     CF_MODEL_MAP(CF__MODEL_ROW)
 #undef CF__MODEL_ROW
 };
+
+/* A tailed twin extends its GGX twin's vector by the tail, at its end. */
+#define CF__TWIN_CHECK(ID, code, name, PARAMS, twin, summary)                             \
+  _Static_assert(                                                                         \
+      CF_MODEL_##ID == CF_MODEL_##twin || (int)CF_##ID##_DIM == (int)CF_##twin##_DIM + 1, \
+      code " is its twin's vector plus the tail");
+CF_MODEL_MAP(CF__TWIN_CHECK)
+#undef CF__TWIN_CHECK
+_Static_assert((int)CF_DIELECTRIC_TAILED_TAIL == (int)CF_DIELECTRIC_DIM &&
+                   (int)CF_DIELECTRIC_TAILED_F0 == (int)CF_DIELECTRIC_F0 &&
+                   (int)CF_DIELECTRIC_TAILED_ROUGHNESS == (int)CF_DIELECTRIC_ROUGHNESS,
+               "M2T extends M2's vector");
+_Static_assert((int)CF_CLAY_TAILED_TAIL == (int)CF_CLAY_DIM &&
+                   (int)CF_CLAY_TAILED_BASE_F0 == (int)CF_CLAY_BASE_F0 &&
+                   (int)CF_CLAY_TAILED_OPTICAL_DEPTH == (int)CF_CLAY_OPTICAL_DEPTH,
+               "M4T extends M4's vector");
+
+/* The codes and names in id order, NULL-terminated (for readers' choices). */
+static const char *const model_codes[CF_MODEL_COUNT + 1] = {
+#define CF__MODEL_CODE(ID, code, ...) code,
+    CF_MODEL_MAP(CF__MODEL_CODE)
+#undef CF__MODEL_CODE
+        NULL};
+static const char *const model_names[CF_MODEL_COUNT + 1] = {
+#define CF__MODEL_NAME(ID, code, name, ...) name,
+    CF_MODEL_MAP(CF__MODEL_NAME)
+#undef CF__MODEL_NAME
+        NULL};
+
+const char *const *cf_model_codes(void) {
+  return model_codes;
+}
+
+const char *const *cf_model_names(void) {
+  return model_names;
+}
 
 const cf_param_info *cf_param_info_get(cf_param_id id) {
   if ((int)id < 0 || id >= CF_PARAM_COUNT) return NULL;

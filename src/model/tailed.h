@@ -80,6 +80,12 @@ CF_ALWAYS_INLINE cf_std_d std_d(const cf_std_tail *t, double sin2_h, double cos2
   double gamma = t->gamma;
   if (t->regime == CF_STD_GGX) {
     cf_ggx_d g = ggx_d(t->a2, t->inv_a2, sin2_h, cos2_h);
+    /* ∂/∂γ of the floored form below, as its neighbours γ = 2 ± h see it
+     * (test_gradient's hard cases at c ~ 1e-100) */
+    if (cos2_h < CF_STD_COS2_MIN) {
+      cos2_h = CF_STD_COS2_MIN;
+      sin2_h = 1.0 - CF_STD_COS2_MIN;
+    }
     double q = sin2_h + t->b2 * cos2_h;
     d.value = g.value;
     d.d_a2 = g.d_a2;

@@ -271,3 +271,7 @@ add_test(NAME cli_fit_gains_diligent
                  ${CMAKE_CURRENT_BINARY_DIR}/cli_fit_gains_diligent
                  ${CMAKE_CURRENT_SOURCE_DIR}/diligent_ball.capture.json ${CLAYFIT_SHARED_DATA})
 set_tests_properties(cli_fit_gains_diligent PROPERTIES LABELS "cli;fit;slow" SKIP_RETURN_CODE 77)
+
+# The tail and the model choice (issue 18): seed sweeps, slow.
+clayfit_c_test(test_fit_tail_choice SOURCES fit/test_fit_tail_choice.c
+               LIBS clayfit_fit_test_support LABELS "fit;slow")

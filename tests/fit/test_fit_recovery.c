@@ -31,6 +31,8 @@ static const truth_case cases[] = {
     {CF_MODEL_DIELECTRIC, {0.6, 0.4, 0.3, 0.3, 0.3, 0.05}},
     {CF_MODEL_CLEARCOAT, {0.6, 0.4, 0.3, 0.3, 0.45, 0.04, 0.6, 0.5}},
     {CF_MODEL_CLAY, {0.7, 0.45, 0.3, 0.3, 0.2, 0.03, 0.1, 0.3, 0.6, 0.6, 0.01}},
+    {CF_MODEL_DIELECTRIC_TAILED, {0.6, 0.4, 0.3, 0.3, 0.3, 0.05, 1.8}},
+    {CF_MODEL_CLAY_TAILED, {0.7, 0.45, 0.3, 0.3, 0.2, 0.03, 0.1, 0.3, 0.6, 0.6, 0.01, 3.0}},
 };
 
 static double elapsed(const struct timespec *t0) {
