@@ -75,8 +75,9 @@ static void split_free(choice_split *split) {
  * in the walk, and `physical` for a single tailed lobe (M2T) that is the
  * simpler reading of M4's stacked lobes. */
 static const fit_choice_rung rungs[] = {
-    {CF_MODEL_LAMBERT, 0},   {CF_MODEL_OREN_NAYAR, 0}, {CF_MODEL_DIELECTRIC, 0},
-    {CF_MODEL_CLEARCOAT, 0}, {CF_MODEL_CLAY, 0},
+    {CF_MODEL_LAMBERT, 0},           {CF_MODEL_OREN_NAYAR, 0}, {CF_MODEL_DIELECTRIC, 0},
+    {CF_MODEL_DIELECTRIC_TAILED, 1}, {CF_MODEL_CLEARCOAT, 0},  {CF_MODEL_CLAY, 0},
+    {CF_MODEL_CLAY_TAILED, 0},
 };
 
 const fit_choice_rung *fit_choice_rungs(int *count) {
