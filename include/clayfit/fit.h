@@ -382,6 +382,10 @@ typedef struct cf_fit_choice {
                               they are not what they are named after ("M4's
                               film parameters describe a second lobe, not a
                               film: ..."); empty if nothing to say */
+  double ggx_cost;         /* a tailed choice (M2T, M4T): its GGX twin's
+                              held-out RMS over its own, minus 1 (NaN for
+                              a GGX choice), and the sentence that says so */
+  char ggx_cost_text[200];
   double seconds;          /* wall time of the choice (the candidates' fits
                               and scores) */
 } cf_fit_choice;

@@ -124,6 +124,7 @@ static void print_choice(const cf_fit_choice *choice, int response_fitted) {
   const cf_fit_candidate *chosen = cf_fit_choice_chosen(choice);
   if (chosen) printf("  %s chosen: %s\n", cf_model_info_get(chosen->model)->code, chosen->note);
   if (choice->reading[0]) printf("  meaning: %s\n", choice->reading);
+  if (choice->ggx_cost_text[0]) printf("  %s\n", choice->ggx_cost_text);
 }
 
 /* A value and its standard deviation; at a bound of its range the sd is

@@ -177,6 +177,10 @@ static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
       "says why",
       "candidates", candidates);
   if (choice->reading[0]) json_object_set_new(out, "reading", json_string(choice->reading));
+  if (choice->ggx_cost_text[0])
+    json_object_set_new(out, "ggx_cost",
+                        json_pack("{s:f, s:s}", "heldout_increase", choice->ggx_cost, "meaning",
+                                  choice->ggx_cost_text));
   return out;
 }
 

@@ -889,6 +889,7 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
                                       "seconds",
                                       "rule",
                                       "reading",
+                                      "ggx_cost",
                                       "candidates",
                                       NULL};
   TRY(json_check_keys(obj, &here, known, err));
@@ -910,6 +911,16 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
   TRY(get_nonneg(obj, &here, "seconds", &x, err));
   TRY(json_get_string(obj, &here, "rule", 1, &text, NULL, err));
   TRY(json_get_string(obj, &here, "reading", 0, &text, NULL, err));
+  const json_t *ggx_cost; /* a tailed choice only */
+  int has_cost;
+  TRY(json_get_object(obj, &here, "ggx_cost", 0, &ggx_cost, &has_cost, err));
+  if (has_cost) {
+    json_at gh = json_member_at(&here, "ggx_cost");
+    static const char *const cost_keys[] = {"heldout_increase", "meaning", NULL};
+    TRY(json_check_keys(ggx_cost, &gh, cost_keys, err));
+    TRY(json_get_number(ggx_cost, &gh, "heldout_increase", 1, -1.0, HUGE_NUMBER, &x, NULL, err));
+    TRY(json_get_string(ggx_cost, &gh, "meaning", 1, &text, NULL, err));
+  }
   n = json_array_size(candidates);
   if (n < 1 || n > CF_MODEL_COUNT)
     return json_fail(&ch, err, CF_EPARSE, "expected 1 to %d candidates, got %zu", CF_MODEL_COUNT,

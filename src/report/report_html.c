@@ -241,6 +241,13 @@ static void choice_table(FILE *f, const report_data *d) {
     html(f, reading);
     fputs(".</p>\n", f);
   }
+  /* a tailed choice: what GGX's lobe would cost (its twin's row) */
+  const char *ggx_cost = json_string_value(json_object_get(json_object_get(choice, "ggx_cost"), "meaning"));
+  if (ggx_cost) {
+    fputs("<p>", f);
+    html(f, ggx_cost);
+    fputs(".</p>\n", f);
+  }
 }
 
 static void plots_and_speed(FILE *f, const report_data *d) {

@@ -2,6 +2,7 @@
  * tail (in at least 19 of 20 noise seeds); a strongly tailed one is; and a
  * capture of one tailed lobe over a Lambert base never gets M4, whose two
  * stacked GGX lobes could imitate the tail. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -33,6 +34,16 @@ static int choose(const char *dir, const char *name, cf_model_id truth, const do
   cf_status s = cf_fit_auto(capture, options, &choice, &result, &err);
   CHECK(s == CF_OK, "%s seed %u: %s", name, seed, err.message);
   int chosen = s == CF_OK ? (int)choice.chosen : -1;
+  /* a tailed choice says what GGX would cost, from its twin's row */
+  if (s == CF_OK && has_tail(choice.chosen)) {
+    CHECK(isfinite(choice.ggx_cost) && choice.ggx_cost_text[0],
+          "%s seed %u: %s chosen without its GGX cost", name, seed,
+          cf_model_info_get(choice.chosen)->code);
+    printf("  %s\n", choice.ggx_cost_text);
+  } else if (s == CF_OK) {
+    CHECK(isnan(choice.ggx_cost) && !choice.ggx_cost_text[0], "%s seed %u: a GGX cost for %s", name,
+          seed, cf_model_info_get(choice.chosen)->code);
+  }
   if (s == CF_OK && verbose) {
     for (int m = 0; m < choice.count; ++m) {
       const cf_fit_candidate *c = &choice.candidate[m];
