@@ -275,3 +275,5 @@ set_tests_properties(cli_fit_gains_diligent PROPERTIES LABELS "cli;fit;slow" SKI
 # The tail and the model choice (issue 18): seed sweeps, slow.
 clayfit_c_test(test_fit_tail_choice SOURCES fit/test_fit_tail_choice.c
                LIBS clayfit_fit_test_support LABELS "fit;slow")
+clayfit_c_test(test_fit_tail_recovery SOURCES fit/test_fit_tail_recovery.c
+               LIBS clayfit_fit_test_support LABELS "fit;slow")
