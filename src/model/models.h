@@ -60,15 +60,7 @@ CF_ALWAYS_INLINE cf_std_dv cf_lobe_dv(const cf_std_tail *tail, const cf_std_tabl
                                       double a2, double inv_a2, double sin2_h, double cos2_h,
                                       double c_i, double c_o, int with_grad) {
   if (tail) return std_dv(tail, table, sin2_h, cos2_h, c_i, c_o, with_grad);
-  cf_ggx_d d = ggx_d(a2, inv_a2, sin2_h, cos2_h);
-  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
-  cf_std_dv s = {d.value * v.value, 0.0, 0.0, 0.0, 0.0, 0.0};
-  if (!with_grad) return s;
-  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
-  s.d_sin2 = d.d_sin2 * v.value;
-  s.d_ci = d.value * v.d_ci;
-  s.d_co = d.value * v.d_co;
-  return s;
+  return ggx_dv(a2, inv_a2, sin2_h, cos2_h, c_i, c_o, with_grad);
 }
 
 /* value and value_grad are called for lit observations only (eval.c

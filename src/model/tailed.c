@@ -406,14 +406,5 @@ cf_std_dv cf_std_dv_eval(const cf_std_tail *t, const cf_std_table *tb, double si
 
 cf_std_dv cf_ggx_dv_eval(double a2, double sin2_h, double cos2_h, double c_i, double c_o,
                          int with_grad) {
-  cf_std_dv s = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  cf_ggx_d d = ggx_d(a2, 1.0 / a2, sin2_h, cos2_h);
-  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
-  s.value = d.value * v.value;
-  if (!with_grad) return s;
-  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
-  s.d_sin2 = d.d_sin2 * v.value;
-  s.d_ci = d.value * v.d_ci;
-  s.d_co = d.value * v.d_co;
-  return s;
+  return ggx_dv(a2, 1.0 / a2, sin2_h, cos2_h, c_i, c_o, with_grad);
 }

@@ -321,6 +321,21 @@ typedef struct cf_std_dv {
   double value, d_a2, d_gamma, d_sin2, d_ci, d_co;
 } cf_std_dv;
 
+/* GGX's D·V with the same partials (d_gamma = 0): the GGX rungs' lobe and
+ * the benchmark's reference. */
+CF_ALWAYS_INLINE cf_std_dv ggx_dv(double a2, double inv_a2, double sin2_h, double cos2_h,
+                                  double c_i, double c_o, int with_grad) {
+  cf_ggx_d d = ggx_d(a2, inv_a2, sin2_h, cos2_h);
+  cf_smith_v v = smith_ggx_v(a2, c_i, c_o);
+  cf_std_dv s = {d.value * v.value, 0.0, 0.0, 0.0, 0.0, 0.0};
+  if (!with_grad) return s;
+  s.d_a2 = d.d_a2 * v.value + d.value * v.d_a2;
+  s.d_sin2 = d.d_sin2 * v.value;
+  s.d_ci = d.value * v.d_ci;
+  s.d_co = d.value * v.d_co;
+  return s;
+}
+
 /* What an M2-like model prepares once per parameter vector. */
 typedef struct cf_std_lobe_prep {
   cf_std_tail tail;
