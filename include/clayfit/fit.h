@@ -390,6 +390,11 @@ typedef struct cf_fit_choice {
                               and scores) */
 } cf_fit_choice;
 
+/* What a fit's parameters mean where they are not what they are named after
+ * (an M4 or M4T whose film is a second lobe, cf_fit_choice.reading; also for
+ * a forced model): 1 and the sentence in text, else 0. */
+int cf_fit_reading(const cf_fit_result *result, char *text, size_t size);
+
 /* The candidate of the chosen model (NULL if none). */
 const cf_fit_candidate *cf_fit_choice_chosen(const cf_fit_choice *choice);
 

@@ -487,7 +487,11 @@ static cf_status write_fit(const fit_command *cmd, const cf_capture *capture,
   if (s != CF_OK) return s;
   for (int i = 0; i < result->warning_count && !ctx->quiet; ++i)
     fprintf(stderr, "clayfit fit: warning: %s\n", result->warnings[i]);
-  if (choice) print_choice(choice, result->response_fitted);
+  char reading[320];
+  if (choice)
+    print_choice(choice, result->response_fitted);
+  else if (cf_fit_reading(result, reading, sizeof reading))
+    printf("meaning: %s\n", reading);
   print_summary(result, capture, path);
   return CF_OK;
 }

@@ -387,14 +387,19 @@ const cf_fit_candidate *cf_fit_choice_chosen(const cf_fit_choice *choice) {
   return NULL;
 }
 
+int cf_fit_reading(const cf_fit_result *result, char *text, size_t size) {
+  char why[160];
+  if (!fit_choice_stacked_lobes(result, why, sizeof why)) return 0;
+  const char *code = cf_model_info_get(result->model)->code;
+  snprintf(text, size, "%s's film parameters describe a second specular lobe, not a film: %s",
+           code, why);
+  return 1;
+}
+
 /* What the chosen fit's parameters mean where not what they are named
  * after (rule 3's output). */
 static void state_reading(cf_fit_choice *choice, const cf_fit_result *result) {
-  char why[160];
-  if (!fit_choice_stacked_lobes(result, why, sizeof why)) return;
-  const char *code = cf_model_info_get(result->model)->code;
-  snprintf(choice->reading, sizeof choice->reading,
-           "%s's film parameters describe a second specular lobe, not a film: %s", code, why);
+  cf_fit_reading(result, choice->reading, sizeof choice->reading);
 }
 
 cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],

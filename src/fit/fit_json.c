@@ -131,10 +131,15 @@ static json_t *params_by_name(cf_model_id model, const double *x) {
 static const char *const loss_names[] = {"none", "huber", "cauchy"};
 
 /* The model choice: the rule, and every candidate's figures. */
-static json_t *choice_json(const cf_fit_choice *choice, cf_model_id model) {
-  if (!choice)
-    return json_pack("{s:s, s:s, s:[]}", "mode", "forced", "chosen", cf_model_info_get(model)->code,
-                     "candidates");
+static json_t *choice_json(const cf_fit_choice *choice, const cf_fit_result *result) {
+  if (!choice) {
+    json_t *forced = json_pack("{s:s, s:s, s:[]}", "mode", "forced", "chosen",
+                               cf_model_info_get(result->model)->code, "candidates");
+    char reading[320];
+    if (cf_fit_reading(result, reading, sizeof reading))
+      json_object_set_new(forced, "reading", json_string(reading));
+    return forced;
+  }
   json_t *candidates = json_array();
   for (int m = 0; m < choice->count; ++m) {
     const cf_fit_candidate *c = &choice->candidate[m];
@@ -329,7 +334,7 @@ static void add_later_sections(json_t *doc, const cf_fit_report *rep,
         json_object_get(doc, "capture"), "reference",
         json_pack("{s:f, s:f, s:I}", "scale", summary->reference_scale, "spread",
                   summary->reference_spread, "pixels", (json_int_t)summary->reference_pixels));
-  json_object_set_new(doc, "choice", choice_json(rep->choice, r->model));
+  json_object_set_new(doc, "choice", choice_json(rep->choice, r));
   json_object_set_new(json_object_get(doc, "timing"), "choice_s",
                       json_real(rep->choice ? rep->choice->seconds : 0.0));
   json_object_set_new(doc, "footprint", footprint_json(rep));

@@ -870,10 +870,12 @@ static cf_status read_choice(const json_t *root, const json_at *at, cf_model_id 
   TRY(json_get_array(obj, &here, "candidates", 1, &candidates, NULL, err));
   json_at ch = json_member_at(&here, "candidates");
   if (mode == 0) {
-    static const char *const known[] = {"mode", "chosen", "candidates", NULL};
+    static const char *const known[] = {"mode", "chosen", "candidates", "reading", NULL};
     TRY(json_check_keys(obj, &here, known, err));
     if (json_array_size(candidates))
       return json_fail(&ch, err, CF_EPARSE, "a forced model has no candidates");
+    const char *text; /* an M4 whose film is a lobe (issue 18; optional) */
+    TRY(json_get_string(obj, &here, "reading", 0, &text, NULL, err));
     return CF_OK;
   }
   static const char *const known[] = {"mode",

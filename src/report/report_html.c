@@ -192,6 +192,12 @@ static void choice_table(FILE *f, const report_data *d) {
   fputs("<h2>Model choice</h2>\n", f);
   if (!json_is_array(list) || json_array_size(list) == 0) {
     fputs("<p>The model was forced (<code>--model</code>): no choice was made.</p>\n", f);
+    const char *reading = json_string_value(json_object_get(choice, "reading"));
+    if (reading) {
+      fputs("<p>Meaning: ", f);
+      html(f, reading);
+      fputs(".</p>\n", f);
+    }
     return;
   }
   fputs("<p>Held out: ", f);

@@ -65,6 +65,18 @@ clayfit_fit_cli_test(fit_forced_hold --schema ${SCHEMA}/fit.schema.json
   --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
   -- ${CLAYFIT} --quiet fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/hold --model dielectric
      --hold f0=0.05 --loss none --footprint centre)
+# A forced M4 whose film is a second lobe (held at roughness 0.9 here) says
+# so, as the choice does (issue 18 item 4): console, fit.json, report.
+clayfit_fit_cli_test(fit_forced_reading --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/reading/fit.json
+  --stdout "meaning: M4's film parameters describe a second specular lobe, not a film: film roughness 0.9 > 0.7"
+  --expect "doc['choice']['mode'] == 'forced' and 'second specular lobe' in doc['choice']['reading']"
+  -- ${CLAYFIT} fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/reading --model M4
+     --hold film_roughness=0.9 --no-multistart --footprint centre)
+clayfit_fit_cli_test(fit_forced_plain --schema ${SCHEMA}/fit.schema.json
+  --json-file ${FIT_SMALL}/plain/fit.json --stdout-not "meaning:"
+  --expect "'reading' not in doc['choice']"
+  -- ${CLAYFIT} fit ${FIT_SMALL}/capture.json -o ${FIT_SMALL}/plain --model M2 --footprint centre)
 # A pixel budget: the sample recorded, the residuals estimated for every
 # observation; a solve out of iterations says so.
 clayfit_fit_cli_test(fit_budget --schema ${SCHEMA}/fit.schema.json
