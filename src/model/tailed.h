@@ -223,8 +223,7 @@ void cf_std_table_nodes_exact(cf_std_node node[CF_STD_TABLE_NODES], double gamma
  * through GGX (j = 16, exactly) to γ = 1.5 + 2.5e-7 (j = 32). Each entry holds
  * h = g f, ∂h/∂y, ∂h/∂p, ∂²h/∂y∂p with f = 1 − p/2, which takes out the
  * pole 1/(2γ − 3) of g at γ → 1.5. Written from the exact nodes by
- * gen/tailed_grid_gen.c, kept in the tree; ctest tailed_grid_check says when
- * it must be written again. */
+ * gen/tailed_grid_gen.c at every build (src/model/CMakeLists.txt). */
 #define CF_STD_GRID_STEP ((1.0 - 1.0 / (CF_STD_GAMMA_BECKMANN - 1.0)) / 16.0)
 static inline double std_grid_p(int j) {
   return 1.0 + (j - 16) * CF_STD_GRID_STEP;

@@ -17,6 +17,8 @@ LIBS := -Wl,--as-needed -lOpenImageIO -lOpenImageIO_Util -ljansson -lm
 
 CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c src/core/order_statistics.c
 MODEL := $(wildcard src/model/*.c)
+# the STD masking's grid, generated as the CMake build does (src/model/CMakeLists.txt)
+GRID := $(OUT)/gen/tailed_grid.c
 COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/colmap_binary.c \
           src/capture/colmap_text.c src/capture/colmap_read.c
 COLMAP_WRITE := src/capture/colmap_write.c
@@ -29,7 +31,7 @@ FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c
 fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
 fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c src/capture/capture_spec.c $(CORE)
 fuzz_text := tests/fuzz/fuzz_text.c tests/fuzz/fuzz_stubs.c $(CAPTURE_FILES) $(IMAGE) $(CORE)
-fuzz_fit_file := tests/fuzz/fuzz_fit_file.c $(FIT_READ) $(MODEL) $(CORE)
+fuzz_fit_file := tests/fuzz/fuzz_fit_file.c $(FIT_READ) $(MODEL) $(GRID) $(CORE)
 fuzz_image := tests/fuzz/fuzz_image.cpp $(IMAGE) $(CORE)
 TARGETS := fuzz_colmap_binary fuzz_capture_spec fuzz_text fuzz_fit_file fuzz_image
 
@@ -48,6 +50,13 @@ $(OUT)/$(1): $(call objects,$($(1)))
 endef
 $(foreach t,$(TARGETS),$(eval $(call link_target,$(t),-fsanitize=fuzzer $(SANITIZE))))
 $(foreach t,$(WRITERS),$(eval $(call link_target,$(t),-fsanitize=fuzzer-no-link $(SANITIZE))))
+
+$(OUT)/gen/tailed_grid_gen: src/model/gen/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -O2 -ffp-contract=off -Iinclude -Isrc $(filter %.c,$^) -lm -o $@
+
+$(GRID): $(OUT)/gen/tailed_grid_gen
+	$< $@
 
 $(OBJ)/%.o: %.c tests/fuzz/fuzz.mk
 	@mkdir -p $(@D)
