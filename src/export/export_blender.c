@@ -158,7 +158,8 @@ static void write_script(export_text *t, const cf_fit_file *fit, const char *fit
 cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const char *path,
                          export_notes *n, cf_error *err) {
   export_material m;
-  export_material_from_fit(fit, &m);
+  cf_status s_map = export_material_from_fit(fit, &m, err);
+  if (s_map != CF_OK) return s_map;
   export_common_notes(n, &m);
   blender_inputs b = {0};
   diffuse_inputs(&m, n, &b);

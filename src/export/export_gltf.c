@@ -193,7 +193,8 @@ static json_t *notes_json(const export_notes *n) {
 cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *path,
                       export_notes *notes, cf_error *err) {
   export_material m;
-  export_material_from_fit(fit, &m);
+  cf_status s_map = export_material_from_fit(fit, &m, err);
+  if (s_map != CF_OK) return s_map;
   export_common_notes(notes, &m);
   json_t *used = json_array();
   json_t *material = material_json(&m, notes, used);

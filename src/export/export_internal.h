@@ -111,21 +111,51 @@ cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel 
                               const export_tail_quadrature *q, const double start[2],
                               export_tail_fit *out, cf_error *err);
 
-/* What the exporters call: the models' Fresnel, the default quadrature. */
+/* What the exporters call: the models' Fresnel, the default quadrature; in
+ * air (M2T's lobe, M4T's film). */
 cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_ggx, double *f0_ggx,
                                  double *rms_loss, cf_error *err);
+
+/* M4's base lobe, seen from outside through the film (F0 film_f0, optical
+ * depth tau: M4's mean over the channels) at the refracted directions: the
+ * same least squares with the lobe's directions inside the film's critical
+ * cone, weighted as an outside pixel sees them (export_mapping.c, tail_film).
+ * film_f0 and tau in the parameter table's ranges, else CF_ERANGE. */
+cf_status export_tail_fit_ggx_film(double r, double gamma, double f0, double film_f0, double tau,
+                                   export_fresnel fresnel, const export_tail_quadrature *q,
+                                   const double start[2], export_tail_fit *out, cf_error *err);
+cf_status export_ggx_from_tailed_film(double r, double gamma, double f0, double film_f0, double tau,
+                                      double *r_ggx, double *f0_ggx, double *rms_loss,
+                                      cf_error *err);
 
 /* "GGX approximation: 6.1 % RMS over the lobe" (below 0.05 %: "< 0.1 %"),
  * the one wording of every preset. */
 void export_ggx_loss_text(double rms_loss, char *text, size_t size);
-/* The note of a tailed lobe: its (r, γ, F0), the GGX written and the loss. */
-void export_note_tailed(export_notes *n, double r, double gamma, double f0, double r_ggx,
-                        double f0_ggx, double rms_loss);
+/* The note of a tailed lobe (`lobe` names it: "the specular lobe"): its
+ * (r, γ, F0), the GGX written and the loss. At γ = 2 (GGX itself, the
+ * mapping the identity) an exact note with a loss of 0. */
+void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
+                        double r_ggx, double f0_ggx, double rms_loss);
 
-/* The fitted material, read off a fit by model. */
+/* A tailed lobe of the fit and the GGX written for it (export_ggx_from_tailed). */
+typedef struct export_tailed_lobe {
+  char name[192]; /* for the note: "the specular lobe" */
+  double r, f0;   /* the fit's */
+  double r_ggx, f0_ggx, rms_loss;
+} export_tailed_lobe;
+
+/* The fitted material, read off a fit by model. A tailed model (M2T, M4T)
+ * is read as its GGX twin: `model` is the twin, every roughness and F0
+ * below the GGX of its lobe (export_ggx_from_tailed; M4T's base under the
+ * film, export_ggx_from_tailed_film); `info` stays the fitted model's,
+ * `lobes` the tailed lobes with their losses (export_common_notes notes
+ * each). */
 typedef struct export_material {
-  cf_model_id model;
-  const cf_model_info *info;
+  cf_model_id model;         /* the GGX twin of the fitted model */
+  const cf_model_info *info; /* the fitted model */
+  double tail;               /* γ of the tailed lobes, 2 (GGX) for a GGX model */
+  int lobe_count;            /* tailed lobes: 0, 1 (M2T) or 2 (M4T: film, base) */
+  export_tailed_lobe lobes[2];
   double albedo[3], sigma;
   /* M2, M3: the interface */
   double roughness, f0, ior;
@@ -139,7 +169,8 @@ typedef struct export_material {
   double base_roughness, base_f0, base_ior_rel, base_ior_abs;
 } export_material;
 
-void export_material_from_fit(const cf_fit_file *fit, export_material *m);
+/* CF_ENOMEM / CF_ENUMERIC from the GGX fit of a tailed lobe. */
+cf_status export_material_from_fit(const cf_fit_file *fit, export_material *m, cf_error *err);
 
 /* Three lines of provenance: clayfit version, fit file, model, capture;
  * every line starts with `prefix`, and the text from fit.json and the fit

@@ -137,16 +137,69 @@ double export_gtr1_width(double gloss) {
   return 0.1 + (0.001 - 0.1) * gloss;
 }
 
-void export_material_from_fit(const cf_fit_file *fit, export_material *m) {
+/* A tailed lobe of the fit replaced by its GGX (r, F0 in place), in air or,
+ * when film is not NULL ({F0_1, τ}), under M4's film. At γ = 2 the lobe is
+ * GGX and the model equals its twin to the bit (test_tailed_rungs), so the
+ * identity is written without a fit and its loss is 0. */
+static cf_status material_tailed_lobe(export_material *m, const char *name, const double *film,
+                                      double *r, double *f0, cf_error *err) {
+  export_tailed_lobe *lobe = &m->lobes[m->lobe_count++];
+  snprintf(lobe->name, sizeof lobe->name, "%s", name);
+  lobe->r = lobe->r_ggx = *r;
+  lobe->f0 = lobe->f0_ggx = *f0;
+  lobe->rms_loss = 0.0;
+  if (m->tail != 2.0) {
+    cf_status s =
+        film ? export_ggx_from_tailed_film(*r, m->tail, *f0, film[0], film[1], &lobe->r_ggx,
+                                           &lobe->f0_ggx, &lobe->rms_loss, err)
+             : export_ggx_from_tailed(*r, m->tail, *f0, &lobe->r_ggx, &lobe->f0_ggx,
+                                      &lobe->rms_loss, err);
+    if (s != CF_OK) {
+      cf_error_prefix(err, "%s", film ? "the base's lobe" : name);
+      return s;
+    }
+  }
+  *r = lobe->r_ggx;
+  *f0 = lobe->f0_ggx;
+  return CF_OK;
+}
+
+/* M4T's lobes: the film's in air; the base's where the model sees it, at
+ * the refracted directions under the fitted film (export_ggx_from_tailed_film,
+ * τ the channels' mean): fitted as if in air instead, its GGX misses the
+ * lobe under the film by 16-41 % RMS where this fit, the best GGX there,
+ * misses it by 1-4 % (tests/export/test_tailed_base.c, docs/presets.md). */
+static cf_status material_clay_lobes(export_material *m, cf_error *err) {
+  if (m->info->tail_slot < 0) return CF_OK;
+  const double film[2] = {m->film_f0, (m->tau[0] + m->tau[1] + m->tau[2]) / 3.0};
+  double eta1 = export_ior_from_f0(film[0]);
+  char base[192];
+  snprintf(base, sizeof base,
+           "the base's lobe (fitted where the model sees it: under the film, at the refracted "
+           "directions c' >= %.3g, weighted by the film's transmission)",
+           sqrt(1.0 - 1.0 / (eta1 * eta1)));
+  cf_status s =
+      material_tailed_lobe(m, "the film's lobe", NULL, &m->film_roughness, &m->film_f0, err);
+  if (s != CF_OK) return s;
+  return material_tailed_lobe(m, base, film, &m->base_roughness, &m->base_f0, err);
+}
+
+cf_status export_material_from_fit(const cf_fit_file *fit, export_material *m, cf_error *err) {
   memset(m, 0, sizeof *m);
   const double *p = fit->result.params;
-  m->model = fit->result.model;
-  m->info = cf_model_info_get(m->model);
+  m->info = cf_model_info_get(fit->result.model);
+  /* a tailed twin's vector is its GGX twin's plus the tail: the twin's
+   * slot constants read it */
+  m->model = m->info->ggx_twin;
+  m->tail = m->info->tail_slot >= 0 ? p[m->info->tail_slot] : 2.0;
   for (int c = 0; c < 3; ++c) m->albedo[c] = p[c]; /* albedo is slot 0 of every model */
   m->sigma = m->model == CF_MODEL_LAMBERT ? 0.0 : p[CF_OREN_NAYAR_DIFFUSE_ROUGHNESS];
+  cf_status s = CF_OK;
   if (m->model == CF_MODEL_DIELECTRIC || m->model == CF_MODEL_CLEARCOAT) {
     m->roughness = p[CF_DIELECTRIC_ROUGHNESS];
     m->f0 = p[CF_DIELECTRIC_F0];
+    if (m->info->tail_slot >= 0)
+      s = material_tailed_lobe(m, "the specular lobe", NULL, &m->roughness, &m->f0, err);
     m->ior = export_ior_from_f0(m->f0);
   }
   if (m->model == CF_MODEL_CLEARCOAT) {
@@ -159,16 +212,18 @@ void export_material_from_fit(const cf_fit_file *fit, export_material *m) {
   if (m->model == CF_MODEL_CLAY) {
     m->film_roughness = p[CF_CLAY_FILM_ROUGHNESS];
     m->film_f0 = p[CF_CLAY_FILM_F0];
-    m->film_ior = export_ior_from_f0(m->film_f0);
     for (int c = 0; c < 3; ++c) {
       m->tau[c] = p[CF_CLAY_OPTICAL_DEPTH + c];
       m->transmittance[c] = exp(-2.0 * m->tau[c]);
     }
     m->base_roughness = p[CF_CLAY_BASE_ROUGHNESS];
     m->base_f0 = p[CF_CLAY_BASE_F0];
+    s = material_clay_lobes(m, err);
+    m->film_ior = export_ior_from_f0(m->film_f0);
     m->base_ior_rel = export_ior_from_f0(m->base_f0);
     m->base_ior_abs = m->film_ior * m->base_ior_rel;
   }
+  return s;
 }
 
 void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
@@ -188,8 +243,10 @@ void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_p
   export_printf(t, " radiometry, ");
   export_escaped(t, escape, fit->capture_path);
   export_printf(t, "); relative RMSE %.4g\n", fit->result.relative_rmse);
-  export_printf(t, "%smodel: docs/model.md of clayfit %s, model version %d%s; mapping: "
-                "docs/presets.md\n", prefix, CLAYFIT_EXPORT_VERSION, fit->model_version,
+  export_printf(t,
+                "%smodel: docs/model.md of clayfit %s, model version %d%s; mapping: "
+                "docs/presets.md\n",
+                prefix, CLAYFIT_EXPORT_VERSION, fit->model_version,
                 fit->model_version < CF_MODEL_VERSION ? " (fitted with Schlick's Fresnel)" : "");
 }
 
@@ -199,6 +256,12 @@ void export_common_notes(export_notes *n, const export_material *m) {
               "roughness is perceptual (GGX alpha = r^2): each target's convention is given "
               "with its input below",
               m->albedo[0], m->albedo[1], m->albedo[2]);
+  /* the tailed lobes first: every value below is their GGX's */
+  for (int k = 0; k < m->lobe_count; ++k) {
+    const export_tailed_lobe *lobe = &m->lobes[k];
+    export_note_tailed(n, lobe->name, lobe->r, m->tail, lobe->f0, lobe->r_ggx, lobe->f0_ggx,
+                       lobe->rms_loss);
+  }
   if (m->model == CF_MODEL_CLAY)
     export_note(n, EXPORT_APPROX,
                 "film optical depth tau %.6g, %.6g, %.6g -> coat colour exp(-2 tau) = %.6g, "
@@ -276,10 +339,39 @@ static double tail_fresnel(const tail_fresnel_prep *p, double c_d, double *d_f0)
   return f.value;
 }
 
-/* One quadrature node: its weight, its geometry and the tailed lobe's value. */
+/* One quadrature node: its weight, the factor k of the residual (the
+ * pixel's radiance is k·f: c_i in air), its geometry, the tailed lobe. */
 typedef struct tail_node {
-  double w, c_i, c_o, sin2_h, cos2_h, c_d, target;
+  double w, k, c_i, c_o, sin2_h, cos2_h, c_d, target;
 } tail_node;
+
+/* M4's base under the film (docs/model.md (23)-(26), (30)): the lobe's own
+ * directions l', v' are the refracted ones, inside the cone c' >= c_min;
+ * an outside pixel sees k·f with, changing variables (dω = η1² c'/c dω'),
+ *   E = ∫∫ (k Δf)² dω_i' w_o dω_o',  k² = c_i c_i' T(c_i)² e^(−2τ/c_i'),
+ *   w_o = c_o' T(c_o)² e^(−2τ/c_o'),
+ * with c the outside cosine of c' and T = 1 − F(F0_1, c). The constants
+ * a_tau's mean and 1/η1² drop out of the relative loss. */
+typedef struct tail_film {
+  cf_fresnel_eta eta1; /* the film's */
+  double eta2, c_min, tau;
+} tail_film;
+
+static tail_film tail_film_prepare(double film_f0, double tau) {
+  tail_film f = {fresnel_eta(film_f0), 0.0, 0.0, tau};
+  f.eta2 = 1.0 + f.eta1.u;
+  f.c_min = sqrt(f.eta1.u / f.eta2);
+  return f;
+}
+
+/* c'·T(c)²·e^(−2τ/c') and, in *c_out, the outside cosine c; 0 outside the cone. */
+static double tail_film_factor(const tail_film *f, double c_in, double *c_out) {
+  double c2 = f->eta2 * c_in * c_in - f->eta1.u;
+  *c_out = c2 > 0.0 ? sqrt(c2) : 0.0;
+  if (!(*c_out > 0.0)) return 0.0;
+  double t = 1.0 - fresnel_dielectric(&f->eta1, *c_out, fresnel_root(&f->eta1, *c_out)).value;
+  return c_in * t * t * exp(-2.0 * f->tau / c_in);
+}
 
 typedef struct tail_problem {
   tail_node *nodes;
@@ -290,14 +382,20 @@ typedef struct tail_problem {
 
 /* The half vectors of one view (c_o, weight w_o): appends the nodes where c_i > 0. */
 static void tail_view_nodes(tail_problem *p, const cf_std_tail *t, const tail_fresnel_prep *fresnel,
-                            double c_o, double w_o, const export_tail_quadrature *q,
-                            const double *xu, const double *wu, const double *xp,
-                            const double *wp) {
+                            const tail_film *film, double c_o, double w_o,
+                            const export_tail_quadrature *q, const double *xu, const double *wu,
+                            const double *xp, const double *wp) {
   double s_o = sqrt((1.0 - c_o) * (1.0 + c_o)), alpha = sqrt(t->a2);
   double l_o = cf_std_masking_eval(t, c_o, 0).value;
+  /* under a film both directions are in the cone c' >= c_min, and so is h:
+   * θ_h's nodes end there (u <= u_max). r 1 under η1 3 (F0_1 0.25): doubling
+   * the quadrature moved the loss by 1.9 % with nodes up to 90°, 4e-5 so */
+  double u_max = 1.0;
+  if (film)
+    u_max = 2.0 / EXPORT_PI * atan(sqrt(1.0 - film->c_min * film->c_min) / (film->c_min * alpha));
   for (int a = 0; a < q->thetas; ++a) {
-    double tu = tan(0.5 * EXPORT_PI * xu[a]), tan_h = alpha * tu, tan2 = tan_h * tan_h;
-    double dtheta = alpha * 0.5 * EXPORT_PI * (1.0 + tu * tu) / (1.0 + tan2);
+    double tu = tan(0.5 * EXPORT_PI * u_max * xu[a]), tan_h = alpha * tu, tan2 = tan_h * tan_h;
+    double dtheta = u_max * alpha * 0.5 * EXPORT_PI * (1.0 + tu * tu) / (1.0 + tan2);
     double cos2_h = 1.0 / (1.0 + tan2), sin2_h = tan2 * cos2_h;
     double c_h = sqrt(cos2_h), s_h = tan_h * c_h;
     /* c_i > 0  <=>  cos φ > −c_o cos 2θ_h / (s_o sin 2θ_h) = num / den */
@@ -308,7 +406,14 @@ static void tail_view_nodes(tail_problem *p, const cf_std_tail *t, const tail_fr
       double phi = phi_max * xp[b];
       double c_d = s_o * s_h * cos(phi) + c_o * c_h, c_i = 2.0 * c_d * c_h - c_o;
       if (!(c_i > 0.0) || !(c_d > 0.0)) continue;
+      double k = c_i, c_out;
+      if (film) {
+        k = tail_film_factor(film, c_i, &c_out);
+        if (!(k > 0.0)) continue; /* outside the cone: no outside light reaches it */
+        k = sqrt(k * c_out);
+      }
       tail_node *n = &p->nodes[p->count++];
+      n->k = k;
       /* view · θ_h (dθ/du, sin θ_h) · φ (both signs) · dω_i/dω_h */
       n->w = w_o * wu[a] * dtheta * s_h * 2.0 * phi_max * wp[b] * 4.0 * c_d;
       n->c_i = c_i;
@@ -321,15 +426,15 @@ static void tail_view_nodes(tail_problem *p, const cf_std_tail *t, const tail_fr
       double vis = 0.5 / (c_o * cf_std_masking_eval(t, c_i, 0).value + c_i * l_o), d_f0;
       double dv = std_d(t, sin2_h, cos2_h).value * vis;
       n->target = tail_fresnel(fresnel, c_d, &d_f0) * dv;
-      double e = c_i * n->target;
+      double e = k * n->target;
       p->energy += n->w * e * e;
     }
   }
 }
 
 static cf_status tail_problem_build(tail_problem *p, double r, double gamma, double f0,
-                                    export_fresnel fresnel, const export_tail_quadrature *q,
-                                    cf_error *err) {
+                                    export_fresnel fresnel, const tail_film *film,
+                                    const export_tail_quadrature *q, cf_error *err) {
   size_t max_nodes = (size_t)q->views * (size_t)q->thetas * (size_t)q->phis;
   int max_rule = q->views > q->thetas ? q->views : q->thetas;
   max_rule = max_rule > q->phis ? max_rule : q->phis;
@@ -353,14 +458,21 @@ static cf_status tail_problem_build(tail_problem *p, double r, double gamma, dou
   /* views by their elevation ψ (c_o = sin ψ): tan ψ = r tan(π u / 2). A
    * sharp lobe changes over c_o ~ α at grazing and is flat above; the scale
    * r = √α, between the two, needs 32 views where uniform c_o needs 100
-   * and the scale α misses the normal views (the doubling test). */
-  for (int v = 0; v < q->views; ++v) {
+   * and the scale α misses the normal views (the doubling test). Under a
+   * film, c_o' in [c_min, 1], no grazing view: uniform in c_o'. */
+  for (int v = 0; v < q->views && film; ++v) {
+    double c_o = film->c_min + (1.0 - film->c_min) * xo[v], c_out;
+    double w_o =
+        2.0 * EXPORT_PI * (1.0 - film->c_min) * wo[v] * tail_film_factor(film, c_o, &c_out);
+    if (w_o > 0.0) tail_view_nodes(p, &t, &fr, film, c_o, w_o, q, xu, wu, xp, wp);
+  }
+  for (int v = 0; v < q->views && !film; ++v) {
     double tu = tan(0.5 * EXPORT_PI * xo[v]), tan_psi = r * tu;
     double dpsi = r * 0.5 * EXPORT_PI * (1.0 + tu * tu) / (1.0 + tan_psi * tan_psi);
     double cos_psi = 1.0 / sqrt(1.0 + tan_psi * tan_psi), c_o = tan_psi * cos_psi;
     /* c_o dω_o = 2π c_o dc_o, dc_o = cos ψ dψ */
     double w_o = 2.0 * EXPORT_PI * c_o * cos_psi * dpsi * wo[v];
-    tail_view_nodes(p, &t, &fr, c_o, w_o, q, xu, wu, xp, wp);
+    tail_view_nodes(p, &t, &fr, NULL, c_o, w_o, q, xu, wu, xp, wp);
   }
   free(rules);
   return CF_OK;
@@ -377,11 +489,11 @@ static double tail_cost(const tail_problem *p, double r, double f0, double *grad
     cf_ggx_d d = ggx_d(a2, inv_a2, n->sin2_h, n->cos2_h);
     cf_smith_v v = smith_ggx_v(a2, n->c_i, n->c_o);
     double df, fr = tail_fresnel(&fresnel, n->c_d, &df);
-    double res = n->c_i * (fr * (d.value * v.value) - n->target); /* target's order */
+    double res = n->k * (fr * (d.value * v.value) - n->target); /* target's order */
     sum += n->w * res * res;
     if (!grad) continue;
-    double j0 = n->c_i * fr * (d.d_a2 * v.value + d.value * v.d_a2) * da2_dr;
-    double j1 = n->c_i * df * d.value * v.value;
+    double j0 = n->k * fr * (d.d_a2 * v.value + d.value * v.d_a2) * da2_dr;
+    double j1 = n->k * df * d.value * v.value;
     g0 += n->w * j0 * res;
     g1 += n->w * j1 * res;
     h00 += n->w * j0 * j0;
@@ -481,9 +593,9 @@ static cf_status tail_check(double r, double gamma, double f0, cf_error *err) {
   return CF_OK;
 }
 
-cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel fresnel,
-                              const export_tail_quadrature *q, const double start[2],
-                              export_tail_fit *out, cf_error *err) {
+static cf_status tail_fit(double r, double gamma, double f0, export_fresnel fresnel,
+                          const tail_film *film, const export_tail_quadrature *q,
+                          const double start[2], export_tail_fit *out, cf_error *err) {
   memset(out, 0, sizeof *out);
   cf_status s = tail_check(r, gamma, f0, err);
   if (s != CF_OK) return s;
@@ -498,7 +610,7 @@ cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel 
     return CF_ERANGE;
   }
   tail_problem p;
-  if ((s = tail_problem_build(&p, r, gamma, f0, fresnel, q, err)) != CF_OK) return s;
+  if ((s = tail_problem_build(&p, r, gamma, f0, fresnel, film, q, err)) != CF_OK) return s;
   out->nodes = p.count;
   if (!(p.energy > 0.0)) { /* F ≡ 0 (the dielectric Fresnel at F0 = 0): nothing to fit */
     out->r = r;
@@ -533,6 +645,41 @@ cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel 
   return CF_OK;
 }
 
+cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel fresnel,
+                              const export_tail_quadrature *q, const double start[2],
+                              export_tail_fit *out, cf_error *err) {
+  return tail_fit(r, gamma, f0, fresnel, NULL, q, start, out, err);
+}
+
+cf_status export_tail_fit_ggx_film(double r, double gamma, double f0, double film_f0, double tau,
+                                   export_fresnel fresnel, const export_tail_quadrature *q,
+                                   const double start[2], export_tail_fit *out, cf_error *err) {
+  const cf_param_info *ff = cf_param_info_get(CF_PARAM_FILM_F0);
+  const cf_param_info *tt = cf_param_info_get(CF_PARAM_OPTICAL_DEPTH);
+  memset(out, 0, sizeof *out);
+  if (!(film_f0 >= ff->lower && film_f0 <= ff->upper) || !(tau >= tt->lower && tau <= tt->upper))
+    return cf_error_set(err, CF_ERANGE,
+                        "GGX fit of a tailed lobe under a film: film F0 %g or optical depth %g "
+                        "outside [%g, %g], [%g, %g] (the parameter table's ranges)",
+                        film_f0, tau, ff->lower, ff->upper, tt->lower, tt->upper);
+  tail_film film = tail_film_prepare(film_f0, tau);
+  return tail_fit(r, gamma, f0, fresnel, &film, q, start, out, err);
+}
+
+cf_status export_ggx_from_tailed_film(double r, double gamma, double f0, double film_f0, double tau,
+                                      double *r_ggx, double *f0_ggx, double *rms_loss,
+                                      cf_error *err) {
+  export_tail_fit fit;
+  const export_tail_quadrature q = EXPORT_TAIL_QUADRATURE;
+  cf_status s = export_tail_fit_ggx_film(r, gamma, f0, film_f0, tau, EXPORT_FRESNEL_MODELS, &q,
+                                         NULL, &fit, err);
+  if (s != CF_OK) return s;
+  *r_ggx = fit.r;
+  *f0_ggx = fit.f0;
+  *rms_loss = fit.rms_loss;
+  return CF_OK;
+}
+
 cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_ggx, double *f0_ggx,
                                  double *rms_loss, cf_error *err) {
   export_tail_fit fit;
@@ -546,18 +693,26 @@ cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_gg
 }
 
 void export_ggx_loss_text(double rms_loss, char *text, size_t size) {
-  if (rms_loss < 0.0005)
+  if (rms_loss == 0.0) /* GGX itself (tail 2), or no lobe (F0 0) */
+    snprintf(text, size, "GGX approximation: 0 %% RMS over the lobe");
+  else if (rms_loss < 0.0005)
     snprintf(text, size, "GGX approximation: < 0.1 %% RMS over the lobe");
   else
     snprintf(text, size, "GGX approximation: %.1f %% RMS over the lobe", 100.0 * rms_loss);
 }
 
-void export_note_tailed(export_notes *n, double r, double gamma, double f0, double r_ggx,
-                        double f0_ggx, double rms_loss) {
+void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
+                        double r_ggx, double f0_ggx, double rms_loss) {
   char loss[96];
   export_ggx_loss_text(rms_loss, loss, sizeof loss);
+  if (gamma == 2.0) {
+    export_note(n, EXPORT_EXACT,
+                "%s: tail gamma 2 is GGX: roughness %.6g, F0 %.6g written as they are; %s", lobe, r,
+                f0, loss);
+    return;
+  }
   export_note(n, EXPORT_APPROX,
-              "tailed lobe (roughness %.6g, tail gamma %.6g, F0 %.6g) -> the GGX of least "
-              "squares over the hemisphere (docs/presets.md): roughness %.6g, F0 %.6g; %s",
-              r, gamma, f0, r_ggx, f0_ggx, loss);
+              "%s: tailed (roughness %.6g, tail gamma %.6g, F0 %.6g) -> the GGX of least "
+              "squares as a renderer sees it (docs/presets.md): roughness %.6g, F0 %.6g; %s",
+              lobe, r, gamma, f0, r_ggx, f0_ggx, loss);
 }

@@ -121,7 +121,8 @@ static const char *principled_body(const export_material *m, export_notes *n, ex
 cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const char *path,
                          export_notes *n, cf_error *err) {
   export_material m;
-  export_material_from_fit(fit, &m);
+  cf_status s_map = export_material_from_fit(fit, &m, err);
+  if (s_map != CF_OK) return s_map;
   export_common_notes(n, &m);
   if (m.model != CF_MODEL_LAMBERT)
     export_note(n, EXPORT_DROPPED,

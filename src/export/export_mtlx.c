@@ -203,7 +203,8 @@ static void open_pbr_surface(const export_material *m, mtlx_shader *s, export_no
 cf_status export_mtlx(const cf_fit_file *fit, const char *fit_path, const char *path, int openpbr,
                       export_notes *notes, cf_error *err) {
   export_material m;
-  export_material_from_fit(fit, &m);
+  cf_status s_map = export_material_from_fit(fit, &m, err);
+  if (s_map != CF_OK) return s_map;
   mtlx_shader shader = {0};
   export_common_notes(notes, &m);
   if (openpbr)

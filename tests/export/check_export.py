@@ -4,7 +4,11 @@ file with an independent tool or schema:
 
   json          data_schema/preset.schema.json (python3-jsonschema), and the
                 round trip: `clayfit eval --preset` equals `clayfit eval --model
-                M --param ...` with the fit's parameters, to the last bit
+                M --param ...` with the fit's parameters, to the last bit (a
+                tailed model's tail included: the json preset is exact)
+  every other format (GGX only): one note "GGX approximation: N % RMS over the
+                lobe" per tailed lobe of M2T / M4T, none for the others; at
+                tail 2 the exact note with 0 %
   mtlx, mtlx-openpbr, mitsuba
                 xmllint --noout, then every node, plugin and input name checked
                 against the standard definitions listed below
@@ -13,7 +17,11 @@ file with an independent tool or schema:
 
 Exit 77 (skipped) when a tool is absent.
 
+With --same-values-as TWIN.json (not json): the file writes the same values
+as TWIN's export (a tailed fit at tail 2 and its GGX twin).
+
 usage: check_export.py CLAYFIT FIT.json FORMAT OUT [--schema DIR] [--node-modules DIR]
+                       [--same-values-as FIT]
 """
 import argparse
 import json
@@ -21,6 +29,7 @@ import os
 import shutil
 import subprocess
 import sys
+import re
 import xml.etree.ElementTree as ET
 
 SKIP = 77
@@ -239,6 +248,78 @@ def check_json(clayfit, fit_path, path, schema_dir, failures):
     print(f"round trip: largest difference {worst} over {len(DIRECTIONS)} direction pairs")
 
 
+# docs/presets.md, "Tailed lobes in GGX-only formats": one note per tailed
+# lobe, the same line in every GGX-only format
+GGX_LOSS = re.compile(r"GGX approximation: (< )?(\d+(?:\.\d+)?) % RMS over the lobe")
+TAILED_LOBES = {"M2T": ["the specular lobe:"], "M4T": ["the film's lobe:", "the base's lobe"]}
+
+
+def notes_text(path, fmt):
+    """The file's notes as one line (the comments' wrapping undone)."""
+    if fmt == "gltf":
+        mapping = json.load(open(path, encoding="utf-8"))["asset"]["extras"]["clayfit"]["mapping"]
+        return " ".join(" ".join(v) for v in mapping.values())
+    text = open(path, encoding="utf-8").read()
+    return re.sub(r"\s*\n\s*(?:#\s*)?", " ", text)
+
+
+def check_tail_notes(fit_path, path, fmt, failures):
+    """A tailed fit in a GGX-only format: each tailed lobe's note with the
+    loss in numbers; at tail 2 the exact note, loss 0."""
+    fit = json.load(open(fit_path, encoding="utf-8"))
+    lobes = TAILED_LOBES.get(fit["model"]["code"], [])
+    text = notes_text(path, fmt)
+    losses = GGX_LOSS.findall(text)
+    if len(losses) != len(lobes):
+        failures.append(f"{len(losses)} 'GGX approximation: N % RMS over the lobe' notes, "
+                        f"expected {len(lobes)} (one per tailed lobe of {fit['model']['code']})")
+        return
+    for lobe in lobes:
+        if lobe not in text:
+            failures.append(f"no note of {lobe}")
+    if not lobes:
+        return
+    tail = fit["params"]["tail"]["value"]
+    for below, number in losses:
+        loss = float(number)
+        if tail == 2.0 and (below or loss != 0.0 or "tail gamma 2 is GGX" not in text):
+            failures.append(f"tail 2: the note should say GGX exactly with loss 0, got {number} %")
+        if tail != 2.0 and not below and not 0.0 < loss < 100.0:
+            failures.append(f"tail {tail}: loss {number} % is not a loss")
+    print(f"tail {tail}: GGX approximation notes {[b + n + ' %' for b, n in losses]}")
+
+
+def written_values(path, fmt):
+    """The inputs a GGX-only file writes: {name: value text}."""
+    if fmt in ("mtlx", "mtlx-openpbr"):
+        shader = ET.parse(path).getroot()[0]
+        return {e.get("name"): e.get("value") for e in shader}
+    if fmt == "blender":
+        scope = {}
+        source = open(path, encoding="utf-8").read().replace("import bpy", "bpy = None")
+        exec(compile(source, path, "exec"), scope)  # noqa: S102 (our own output; bpy stubbed)
+        return dict(scope["INPUTS"])
+    if fmt == "gltf":
+        return json.load(open(path, encoding="utf-8"))["materials"][0]
+    return {e.get("name"): e.get("value") for e in ET.parse(path).getroot()[0]}
+
+
+def check_same_values(clayfit, path, fmt, twin_fit, failures):
+    """At tail 2 the file writes what the GGX twin's fit writes."""
+    other = path + ".twin"
+    result = run([clayfit, "export", twin_fit, "--format", fmt, "-o", other])
+    if result.returncode != 0:
+        failures.append(f"export of {twin_fit}: exit {result.returncode}")
+        return
+    a, b = written_values(path, fmt), written_values(other, fmt)
+    a.pop("name", None)
+    b.pop("name", None)
+    if a != b:
+        failures.append(f"written values differ from the GGX twin's: {a} != {b}")
+    else:
+        print(f"the same values as {twin_fit}: {a}")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("clayfit")
@@ -248,11 +329,21 @@ def main():
     parser.add_argument("--schema", default=os.path.join(os.path.dirname(__file__), "..", "..",
                                                          "data_schema"))
     parser.add_argument("--node-modules")
+    parser.add_argument("--same-values-as", metavar="FIT",
+                        help="the file must write the values this fit's export writes")
     args = parser.parse_args()
     result = run([args.clayfit, "export", args.fit, "--format", args.format, "-o", args.out])
     print("$ clayfit export", args.fit, "--format", args.format, "-o", args.out)
     print(result.stderr.strip())
     failures = []
+    if result.returncode == 0 and args.format != "json":
+        check_tail_notes(args.fit, args.out, args.format, failures)
+        if args.same_values_as:
+            check_same_values(args.clayfit, args.out, args.format, args.same_values_as, failures)
+        if failures:  # before a validator that may be absent (exit 77)
+            for failure in failures:
+                print("FAIL:", failure)
+            return 1
     if result.returncode != 0:
         failures.append(f"clayfit export: exit {result.returncode}")
     elif args.format == "json":

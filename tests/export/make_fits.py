@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write one fit.json per model M0..M4 (data_schema/fit.schema.json) with
+"""Write one fit.json per model M0..M4, M2T, M4T (data_schema/fit.schema.json) with
 chosen parameters, as `clayfit fit --model Mk` would, without fitting: the
 fixtures of the export tests. The parameter table comes from
 `clayfit models --json`. M4 uses oil (film_f0 0.06, above glTF's fixed
@@ -21,6 +21,12 @@ VALUES = {
            "film_f0": 0.06, "optical_depth": [0.3, 0.2, 0.1], "base_roughness": 0.55,
            "base_f0": 0.004},
 }
+# The tailed twins (docs/presets.md, "Tailed lobes in GGX-only formats"): the
+# twin's values and a long tail; M2T-tail2 at tail 2, where the GGX written
+# is the fit's own (r, F0) and the loss 0.
+VALUES["M2T"] = dict(VALUES["M2"], tail=1.7)
+VALUES["M4T"] = dict(VALUES["M4"], tail=1.8)
+TAIL2 = {"M2T-tail2": ("M2T", dict(VALUES["M2"], tail=2.0))}
 
 
 def fit_json(model, values):
@@ -36,7 +42,7 @@ def fit_json(model, values):
         else:
             slots.append(p["name"])
     derived = None
-    if model["code"] == "M4":
+    if model["code"] in ("M4", "M4T"):
         tau = values["optical_depth"]
         d = sum(tau) / 3 / 0.8
         derived = {"density": d, "convention": "mean absorption 0.8 (docs/model.md §3.6)",
@@ -90,6 +96,11 @@ def main():
         os.makedirs(folder, exist_ok=True)
         with open(os.path.join(folder, "fit.json"), "w", encoding="utf-8") as f:
             json.dump(fit_json(model, VALUES[model["code"]]), f, indent=2)
+    by_code = {m["code"]: m for m in models}
+    for name, (code, values) in TAIL2.items():
+        os.makedirs(os.path.join(out, name), exist_ok=True)
+        with open(os.path.join(out, name, "fit.json"), "w", encoding="utf-8") as f:
+            json.dump(fit_json(by_code[code], values), f, indent=2)
     # a fit.json with a wrong type, for the error tests
     bad = fit_json(models[2], VALUES["M2"])
     bad["params"]["roughness"]["value"] = "0.3"

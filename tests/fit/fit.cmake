@@ -45,7 +45,7 @@ endfunction()
 clayfit_fit_cli_test(fit_auto --schema ${SCHEMA}/fit.schema.json
   --json-file ${FIT_SMALL}/auto/fit.json
   --expect "doc['model']['code'] == 'M2' and doc['choice']['mode'] == 'auto'"
-  --expect "[c['model'] for c in doc['choice']['candidates']] == ['M0', 'M1', 'M2', 'M3', 'M4']"
+  --expect "[c['model'] for c in doc['choice']['candidates']] == ['M0', 'M1', 'M2', 'M2T', 'M3', 'M4', 'M4T']"
   --expect "sum(c['chosen'] for c in doc['choice']['candidates']) == 1"
   --expect "abs(doc['params']['roughness']['value'] - 0.3) < 1e-4"
   --expect "abs(doc['params']['f0']['value'] - 0.05) < 1e-4"
