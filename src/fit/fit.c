@@ -585,8 +585,13 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   if (s != CF_OK) return s;
   r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
   clock = then;
-  s = refine_on_subsample(capture, population, o, &run.plan, REFINE_TARGET, run.sigma, params,
-                          &log_scale, r, &run.switched, err);
+  /* a given start is already a fit (the model choice's, on about 22 000
+   * observations): refining it on 40 000 first saves the full solve nothing
+   * (DiLiGenT: 43 + 27 iterations against 26, the same minimum within 0.05
+   * sd, 10 % less CPU) */
+  if (!o->use_start)
+    s = refine_on_subsample(capture, population, o, &run.plan, REFINE_TARGET, run.sigma, params,
+                            &log_scale, r, &run.switched, err);
   if (s == CF_OK) /* an unknown tone curve: the curve's shape from a few starts */
     s = fit_response_starts(capture, population, o, &run.plan, run.sigma, params, &log_scale,
                             response, err);
