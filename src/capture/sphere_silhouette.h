@@ -60,7 +60,11 @@ typedef struct cf_silhouette_hint {
  *   of the gradient magnitude of the blurred linear grey along its
  *   gradient, Devernay 1995) kept by an iterative outlier rejection; the
  *   edge of a shaded sphere may sit a few tenths of a pixel inside the
- *   true outline where the shading rises steeply from the limb. A
+ *   true outline where the shading rises steeply from the limb. Where the
+ *   limb is a dark band against a brighter background, the band's outer
+ *   edge is taken for the outline, not its inner one (often the stronger
+ *   in sRGB), if it is at most max(3 px, 0.03 r) further out and at least
+ *   half as strong. A
  *   detection is refused (CF_ENOTFOUND, saying which check failed) when
  *   its points cover less than 35% of the outline's directions, or not
  *   10 binomial standard deviations more of them than outlines a few px
