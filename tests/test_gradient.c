@@ -116,6 +116,7 @@ static int f0_small_difference(cf_model_id model, const double *params, int k, c
 static void compare(gradient_state *s, const double *params, const double n[3], const double l[3],
                     const double v[3]) {
   const int dim = cf_model_info_get(s->model)->dim;
+  const int table = cf_model_info_get(s->model)->tail_slot >= 0; /* a tailed twin */
   double f[3], grad[3 * CF_MAX_DIM];
   cf_eval(s->model, params, n, l, v, f, grad);
   for (int k = 0; k < dim; ++k) {
@@ -132,7 +133,6 @@ static void compare(gradient_state *s, const double *params, const double n[3], 
     }
     for (int c = 0; c < 3; ++c) {
       double g = grad[c * dim + k];
-      int table = cf_model_info_get(s->model)->tail_slot >= 0;
       double eps_rel = !one_sided ? eps_rel_central
                        : table    ? eps_rel_one_sided_table
                                   : eps_rel_one_sided;

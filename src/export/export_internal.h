@@ -87,6 +87,11 @@ typedef enum export_fresnel { EXPORT_FRESNEL_SCHLICK, EXPORT_FRESNEL_DIELECTRIC 
 #define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_SCHLICK
 #endif
 
+/* Gauss-Legendre nodes and weights on [0, 1], n of them (Newton on P_n from
+ * the Chebyshev-like guess; Numerical Recipes' gauleg): the tailed lobe's
+ * quadratures and their tests. */
+void export_gauss_legendre01(int n, double *x, double *w);
+
 /* Gauss-Legendre points: views (their elevation), θ_h, φ_h. The default
  * agrees with 128 × 192 × 64 points to 1.4e-4 relative in the loss and
  * 3.5e-5 in (r, F0), over r in [0.03, 1] and γ in [1.55, 1e6]

@@ -293,9 +293,8 @@ void export_common_notes(export_notes *n, const export_material *m) {
  * [0, φ_max], where φ_max closes the region c_i > 0 (the integrand vanishes
  * there as c_i², so the rule stays spectral). */
 
-/* Gauss-Legendre nodes and weights on [0, 1] (Newton on P_n from the
- * Chebyshev-like guess; Numerical Recipes' gauleg). */
-static void gauss_legendre01(int n, double *x, double *w) {
+/* export_internal.h */
+void export_gauss_legendre01(int n, double *x, double *w) {
   for (int i = 0; i < (n + 1) / 2; ++i) {
     double z = cos(EXPORT_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
     for (int it = 0; it < 100; ++it) {
@@ -450,9 +449,9 @@ static cf_status tail_problem_build(tail_problem *p, double r, double gamma, dou
   }
   double *xo = rules, *wo = xo + max_rule, *xu = wo + max_rule, *wu = xu + max_rule;
   double *xp = wu + max_rule, *wp = xp + max_rule;
-  gauss_legendre01(q->views, xo, wo);
-  gauss_legendre01(q->thetas, xu, wu);
-  gauss_legendre01(q->phis, xp, wp);
+  export_gauss_legendre01(q->views, xo, wo);
+  export_gauss_legendre01(q->thetas, xu, wu);
+  export_gauss_legendre01(q->phis, xp, wp);
   cf_std_tail t = cf_std_tail_prepare(r * r * r * r, gamma);
   tail_fresnel_prep fr = tail_fresnel_prepare(fresnel, f0);
   /* views by their elevation ψ (c_o = sin ψ): tan ψ = r tan(π u / 2). A

@@ -44,32 +44,11 @@ static node nodes[MAX_NODES];
  * over the azimuth's 2π); lights around the mirror direction, δ from it by
  * tan(δ/2) = s tan(π u/2) (dense near the mirror for sharp lobes), β around
  * it over [0, π] twice (the plane of incidence is a mirror plane). */
-static void gauss_legendre01(int n, double *x, double *w) {
-  for (int i = 0; i < (n + 1) / 2; ++i) {
-    double z = cos(PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
-    for (int it = 0; it < 100; ++it) {
-      double p1 = 1.0, p2 = 0.0;
-      for (int j = 1; j <= n; ++j) {
-        double p3 = p2;
-        p2 = p1;
-        p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
-      }
-      dp = n * (z * p1 - p2) / (z * z - 1.0);
-      double step = p1 / dp;
-      z -= step;
-      if (fabs(step) < 1e-15) break;
-    }
-    x[i] = 0.5 * (1.0 - z);
-    x[n - 1 - i] = 0.5 * (1.0 + z);
-    w[i] = w[n - 1 - i] = 1.0 / ((1.0 - z * z) * dp * dp);
-  }
-}
-
 static int build_nodes(const quad *q, double s) {
   double xo[64], wo[64], xd[160], wd[160], xb[128], wb[128];
-  gauss_legendre01(q->views, xo, wo);
-  gauss_legendre01(q->deltas, xd, wd);
-  gauss_legendre01(q->betas, xb, wb);
+  export_gauss_legendre01(q->views, xo, wo);
+  export_gauss_legendre01(q->deltas, xd, wd);
+  export_gauss_legendre01(q->betas, xb, wb);
   int count = 0;
   for (int a = 0; a < q->views; ++a) {
     double psi = 0.5 * PI * xo[a], c_o = sin(psi), s_o = cos(psi);

@@ -171,24 +171,6 @@ typedef struct brute {
   size_t count;
 } brute;
 
-static void legendre01(int n, double *x, double *w) {
-  for (int i = 0; i < n; ++i) {
-    double z = cos(PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
-    for (int it = 0; it < 100; ++it) {
-      double p1 = 1.0, p2 = 0.0;
-      for (int j = 1; j <= n; ++j) {
-        double p3 = p2;
-        p2 = p1;
-        p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
-      }
-      dp = n * (z * p1 - p2) / (z * z - 1.0);
-      z -= p1 / dp;
-    }
-    x[i] = 0.5 * (1.0 - z);
-    w[i] = 1.0 / ((1.0 - z * z) * dp * dp);
-  }
-}
-
 static brute brute_build(double r, double gamma, double f0) {
   brute b;
   size_t n = (size_t)BF_VIEWS * BF_LIGHTS * BF_PHIS;
@@ -197,8 +179,8 @@ static brute brute_build(double r, double gamma, double f0) {
   b.weight_d = all + 5 * n, b.target = all + 6 * n;
   b.count = 0;
   double xo[BF_VIEWS], wo[BF_VIEWS], xi[BF_LIGHTS], wi[BF_LIGHTS];
-  legendre01(BF_VIEWS, xo, wo);
-  legendre01(BF_LIGHTS, xi, wi);
+  export_gauss_legendre01(BF_VIEWS, xo, wo);
+  export_gauss_legendre01(BF_LIGHTS, xi, wi);
   cf_std_tail t = cf_std_tail_prepare(r * r * r * r, gamma);
   for (int v = 0; v < BF_VIEWS; ++v)
     for (int l = 0; l < BF_LIGHTS; ++l)
