@@ -25,8 +25,8 @@
 #include "fit_budget.h"
 #include "fit_footprint.h"
 #include "fit_gains.h"
-#include "fit_jpeg.h"
 #include "fit_hidden_base.h"
+#include "fit_jpeg.h"
 #include "fit_multistart.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
@@ -242,6 +242,7 @@ typedef struct fit_run {
   const cf_capture *capture;
   const fit_population *population;
   const cf_fit_options *o;
+  double tolerance; /* the solves' (0: the solver's) */
   cf_fit_result *r;
   fit_plan plan;
   fit_problem p; /* over the whole population */
@@ -309,6 +310,7 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
    * default budget, the undamped steps then kept 1 % of their promise for
    * 29 iterations while the radius halved, 48 iterations in all where 24
    * reach the same cost) */
+  p->function_tolerance = run->tolerance;
   p->newton_start = 1; /* from the refinement's (or the best start's) minimum */
   /* an unknown tone curve: the response curve is fitted from here on
    * (the starts and the subsample assume a linear response) */
@@ -374,8 +376,7 @@ static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
   if (s == CF_OK && vary)
     s = fit_solve_reweighted(p, run->capture, o, REWEIGHT_ROUNDS, &run->summary, &weights_current,
                              err);
-  if (s == CF_OK && vary && !weights_current)
-    s = fit_problem_reweight(p, run->capture, err);
+  if (s == CF_OK && vary && !weights_current) s = fit_problem_reweight(p, run->capture, err);
   for (int round = 0; s == CF_OK && round < FOOTPRINT_ROUNDS; ++round) {
     int changed = 0;
     s = fit_footprint_update(p, run->capture, o, &changed, err);
@@ -568,12 +569,18 @@ static cf_status solve_population(fit_run *run, const double *params, double log
 }
 
 cf_status fit_run_population(const cf_capture *capture, const fit_population *population,
-                             const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
+                             const cf_fit_options *o, double tolerance, cf_fit_result *r,
+                             cf_error *err) {
   memset(r, 0, sizeof *r);
   r->model = o->model;
   cf_status s = cf_fit_check_options(o, err);
   if (s != CF_OK) return s;
-  fit_run run = {.capture = capture, .population = population, .o = o, .r = r, .sigma = 1.0};
+  fit_run run = {.capture = capture,
+                 .population = population,
+                 .o = o,
+                 .tolerance = tolerance,
+                 .r = r,
+                 .sigma = 1.0};
   fit_plan_for(capture, o, &run.plan);
   if (cf_capture_observations(capture)->count == 0 || population->count == 0)
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
@@ -633,7 +640,7 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
                           &budget, err);
     if (s == CF_OK) population = (fit_population){budget.index, budget.count, budget.weight};
   }
-  if (s == CF_OK) s = fit_run_population(capture, &population, o, r, err);
+  if (s == CF_OK) s = fit_run_population(capture, &population, o, 0.0, r, err);
   if (s == CF_OK && budget.weight) {
     r->sample_count = budget.count;
     r->population_count = in_use;

@@ -71,6 +71,13 @@ static void split_free(choice_split *split) {
   free(split->test);
 }
 
+/* A candidate's solves stop when a step changes the cost by less than
+ * this, relative (the fit's own: 1e-10): about 0.1 σ² on DiLiGenT's
+ * training part (10⁵), where the choice's margins are a BIC of 10 (a cost
+ * of 5) and 1 % of the held-out error. Measured there: 0.84× the CPU time
+ * of the whole fit, the same choice, held-out errors within 0.06 %. */
+#define FIT_CANDIDATE_TOLERANCE 1e-6
+
 /* The candidates, simplest first. A new rung is one line here: its place
  * in the walk, and `physical` for a single tailed lobe (M2T) that is the
  * simpler reading of M4's stacked lobes. */
@@ -129,7 +136,8 @@ static void fit_candidate(void *user, int i) {
   }
   cf_error err = {0};
   double clock = cf_now_seconds();
-  cf_status s = fit_run_population(w->capture, w->train, &o, &c->fit, &err);
+  cf_status s =
+      fit_run_population(w->capture, w->train, &o, FIT_CANDIDATE_TOLERANCE, &c->fit, &err);
   c->seconds = cf_now_seconds() - clock;
   c->ok = s == CF_OK;
   if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
@@ -391,8 +399,8 @@ int cf_fit_reading(const cf_fit_result *result, char *text, size_t size) {
   char why[160];
   if (!fit_choice_stacked_lobes(result, why, sizeof why)) return 0;
   const char *code = cf_model_info_get(result->model)->code;
-  snprintf(text, size, "%s's film parameters describe a second specular lobe, not a film: %s",
-           code, why);
+  snprintf(text, size, "%s's film parameters describe a second specular lobe, not a film: %s", code,
+           why);
   return 1;
 }
 
