@@ -207,11 +207,16 @@ typedef struct sums {
   double e2, y2;
 } sums;
 
-/* Add image d's residuals within radius r_max of its brightest pixel
- * (core: r ≤ CORE_R; ring: CORE_R < r ≤ RING_R), the prediction
- * convolved with kernel (NULL: as predicted). */
-static void core_error(const image_data *d, const double *kernel, sums *core, sums *ring) {
-  int n = 2 * KERNEL_R + 1;
+/* The prediction at pixel (x, y), channel c, by one of the tests below
+ * (NAN: none). */
+typedef double (*predict_fn)(const image_data *d, int c, int x, int y, const void *user);
+
+/* Add image d's residuals within RING_R of its brightest pixel (core:
+ * r ≤ CORE_R; ring: CORE_R < r ≤ RING_R) against `predict` (NAN: the
+ * fit's prediction); a clipped channel predicted at or above its value is
+ * censored. */
+static void window_error(const image_data *d, predict_fn predict, const void *user, sums *core,
+                         sums *ring) {
   for (int y = d->by - RING_R; y <= d->by + RING_R; ++y)
     for (int x = d->bx - RING_R; x <= d->bx + RING_R; ++x) {
       if (x < 0 || y < 0 || x >= d->w || y >= d->h || !is_core(d, x, y, RING_R)) continue;
@@ -219,18 +224,29 @@ static void core_error(const image_data *d, const double *kernel, sums *core, su
       if (isnan(d->y[0][q])) continue;
       sums *s = is_core(d, x, y, CORE_R) ? core : ring;
       for (int c = 0; c < 3; ++c) {
-        double mu = d->p[c][q];
-        if (kernel) {
-          mu = 0.0;
-          for (int j = 0; j < n * n; ++j)
-            if (kernel[j] != 0.0)
-              mu += kernel[j] * source(d, c, x + j % n - KERNEL_R, y + j / n - KERNEL_R);
-        }
-        double yv = d->y[c][q];
+        double mu = predict(d, c, x, y, user), yv = d->y[c][q];
+        if (isnan(mu)) mu = d->p[c][q];
         if ((d->clip[q] >> c & 1u) && mu >= yv) continue; /* censored */
         s->e2 += (mu - yv) * (mu - yv), s->y2 += yv * yv;
       }
     }
+}
+
+/* The prediction convolved with a (2 KERNEL_R + 1)² kernel (NULL: as
+ * predicted). */
+static double convolved(const image_data *d, int c, int x, int y, const void *user) {
+  const double *kernel = user;
+  int n = 2 * KERNEL_R + 1;
+  if (!kernel) return NAN;
+  double mu = 0.0;
+  for (int j = 0; j < n * n; ++j)
+    if (kernel[j] != 0.0)
+      mu += kernel[j] * source(d, c, x + j % n - KERNEL_R, y + j / n - KERNEL_R);
+  return mu;
+}
+
+static void core_error(const image_data *d, const double *kernel, sums *core, sums *ring) {
+  window_error(d, convolved, kernel, core, ring);
 }
 
 typedef struct set {
@@ -493,25 +509,25 @@ static double shifted(const image_data *d, int c, int x, int y, double dx, doubl
   return sum;
 }
 
+/* The prediction shifted by (dx, dy) and scaled by g, where the shift
+ * stays inside the image (else the prediction, scaled). */
+typedef struct shift {
+  double dx, dy, g;
+} shift;
+
+static double shifted_scaled(const image_data *d, int c, int x, int y, const void *user) {
+  const shift *t = user;
+  double mu = shifted(d, c, x, y, t->dx, t->dy);
+  if (isnan(mu)) mu = d->p[c][(size_t)y * (size_t)d->w + (size_t)x];
+  return mu * t->g;
+}
+
 /* Core (r ≤ CORE_R) and ring sums of image d's prediction shifted by
  * (dx, dy) and scaled by g. */
 static void shift_error(const image_data *d, double dx, double dy, double g, sums *core,
                         sums *ring) {
-  for (int y = d->by - RING_R; y <= d->by + RING_R; ++y)
-    for (int x = d->bx - RING_R; x <= d->bx + RING_R; ++x) {
-      if (x < 0 || y < 0 || x >= d->w || y >= d->h || !is_core(d, x, y, RING_R)) continue;
-      size_t q = (size_t)y * (size_t)d->w + (size_t)x;
-      if (isnan(d->y[0][q])) continue;
-      sums *s = is_core(d, x, y, CORE_R) ? core : ring;
-      for (int c = 0; c < 3; ++c) {
-        double mu = shifted(d, c, x, y, dx, dy);
-        if (isnan(mu)) mu = d->p[c][q];
-        mu *= g;
-        double yv = d->y[c][q];
-        if ((d->clip[q] >> c & 1u) && mu >= yv) continue;
-        s->e2 += (mu - yv) * (mu - yv), s->y2 += yv * yv;
-      }
-    }
+  shift t = {dx, dy, g};
+  window_error(d, shifted_scaled, &t, core, ring);
 }
 
 /* Per image, the sub-pixel shift of the prediction that minimises its
