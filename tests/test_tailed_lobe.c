@@ -754,6 +754,37 @@ static void check_table_accuracy(void) {
       TABLE_GAMMA_ASSERTED, worst_low);
 }
 
+/* The table's first node, u = 0 (w = 1): ∂g/∂w and ∂²g/∂w∂γ there are limits
+ * (tailed.c, first_node_slopes); against −(∂g/∂u)/(2u) from the exact masking
+ * at u = 1e-4, where the difference is O(u²), and its central difference in γ. */
+static void check_table_first_node(void) {
+  static const double gammas[] = {1.51, 1.6, 2.0, 2.5, 5.0, 30.0, 1e3};
+  static cf_std_node node[CF_STD_TABLE_NODES];
+  const double u = 1e-4, s2 = (1.0 - u) * (1.0 + u);
+  double worst = 0.0, worst_gamma = 0.0;
+  for (size_t i = 0; i < sizeof gammas / sizeof gammas[0]; ++i) {
+    double gamma = gammas[i], h = 1e-4 * fmin(gamma - 1.5, 0.1); /* the pole at 1.5 */
+    cf_std_table_nodes_exact(node, gamma);
+    CHECK(cf_std_table_position(0) == 1.0, "the first node is at w = 1");
+    double slope[3];
+    for (int k = 0; k < 3; ++k) { /* at γ, γ + h, γ − h */
+      cf_std_tail t = cf_std_tail_prepare(1.0, gamma + (k == 0 ? 0.0 : k == 1 ? h : -h));
+      t.regime = CF_STD_GENERAL;
+      slope[k] = -0.5 * cf_std_node_exact(&t, u, s2).g_w / u;
+    }
+    double e = fabs(node[0].g_w - slope[0]) / fmax(1.0, fabs(slope[0]));
+    double fd = (slope[1] - slope[2]) / (2.0 * h);
+    double e_gamma = fabs(node[0].g_w_gamma - fd) / fmax(1.0, fabs(fd));
+    CHECK(e <= 1e-6 && e_gamma <= 1e-6,
+          "gamma %g: first node dg/dw %.12g against %.12g, d2g/dwdgamma %.12g against %.12g", gamma,
+          node[0].g_w, slope[0], node[0].g_w_gamma, fd);
+    worst = fmax(worst, e);
+    worst_gamma = fmax(worst_gamma, e_gamma);
+  }
+  printf("table's first node (u = 0): dg/dw within %.2g, d2g/dw dgamma within %.2g of the limit\n",
+         worst, worst_gamma);
+}
+
 /* The tabulated lobe D V at x = {α², γ, −, −, sin²θ_h, c_i, c_o}, its table
  * built for x's γ (exact nodes or the grid's slice). */
 static void eval_tabulated(const grad_point *p, const double *x, int exact_nodes, double *f,
@@ -1047,6 +1078,7 @@ int main(int argc, char **argv) {
   SECTION("hard", check_hard_grid());
   SECTION("beckmann", check_beckmann_limit());
   SECTION("table", check_table_accuracy());
+  SECTION("table", check_table_first_node());
   SECTION("table", check_table_gradients(&rng));
   SECTION("table", check_table_ggx_reciprocity_hard(&rng));
   SECTION("bench", print_cost(&rng));

@@ -141,7 +141,6 @@ cf_std_tail cf_std_tail_prepare(double a2, double gamma) {
   t.gamma = gamma;
   t.a = gamma - 1.0;
   t.b2 = t.a * a2;
-  t.inv_b2 = 1.0 / t.b2;
   t.inv_a = 1.0 / t.a;
   if (!(gamma > CF_STD_GAMMA_MIN)) {
     t.regime = CF_STD_MASKED;
@@ -285,8 +284,7 @@ double cf_std_table_position(int k) {
   return ldexp(1.0 - 0.5 * q / steps, -j); /* q = steps: 2^(−j−1) */
 }
 
-cf_std_node cf_std_node_exact(const cf_std_tail *t, double c) {
-  double s2 = (1.0 - c) * (1.0 + c);
+cf_std_node cf_std_node_exact(const cf_std_tail *t, double c, double s2) {
   masking_parts p = masking_parts_of(t, c, s2, 1);
   cf_std_masking m = masking_from_parts(t, &p, c, s2);
   /* ∂(∂L/∂c)/∂γ = ∂/∂a|β² + α² ∂/∂β², from ∂L/∂c = 1 − KT − 2cKE/s² with
@@ -300,18 +298,37 @@ cf_std_node cf_std_node_exact(const cf_std_tail *t, double c) {
   return n;
 }
 
+/* The first node, u = 0 (w = 1), at α = 1 (β² = a): g is even in u (L(−c) = L(c)
+ * from Λ(−μ) = −1 − Λ(μ)), and ∂g/∂w = −(∂g/∂u)/(2u) tends to
+ *   −K (a − 1)/(√a (2a − 1))
+ * (1 − KT = 2Kc/√Q + O(c³) and E → √a/(2a − 1) in (T5)); its ∂/∂γ = d/da of
+ * that, with d/da[(a − 1)/(√a (2a − 1))] = (5a − 2a² − 1)/(2 a^(3/2) (2a − 1)²). */
+static void first_node_slopes(const cf_std_tail *t, cf_std_node *n) {
+  double a = t->a, sqrt_a = sqrt(a), m = 2.0 * a - 1.0;
+  double f = (a - 1.0) / (sqrt_a * m),
+         df = (5.0 * a - 2.0 * a * a - 1.0) / (2.0 * a * sqrt_a * m * m);
+  n->g_w = -t->k * f;
+  n->g_w_gamma = -t->k * (t->dlnk_da * f + df);
+}
+
 void cf_std_table_nodes_exact(cf_std_node node[CF_STD_TABLE_NODES], double gamma) {
   cf_std_tail t = cf_std_tail_prepare(1.0, gamma);
   t.regime = CF_STD_GENERAL; /* at γ = 2 too: the nodes' ∂/∂γ */
   for (int k = 0; k < CF_STD_TABLE_NODES; ++k) {
-    cf_std_node n = cf_std_node_exact(&t, 1.0 - cf_std_table_position(k)); /* u, exact */
-    n.g_y = -n.g_y; /* ∂/∂y = −∂/∂u */
-    n.g_y_gamma = -n.g_y_gamma;
+    /* at α = 1, w = s² exactly and u = c = √(1 − w) (1 − w is exact) */
+    double w = cf_std_table_position(k), u = sqrt(1.0 - w);
+    cf_std_node n = cf_std_node_exact(&t, u, w);
+    if (k == 0) {
+      first_node_slopes(&t, &n);
+    } else { /* ∂/∂w = −(∂/∂u)/(2u) */
+      n.g_w = -0.5 * n.g_w / u;
+      n.g_w_gamma = -0.5 * n.g_w_gamma / u;
+    }
     node[k] = n;
   }
 }
 
-/* Hermite to power series on each step: with m = h ∂g/∂y at the ends,
+/* Hermite to power series on each step: with m = h ∂g/∂w at the ends,
  * g = p0 + m0 t + (3(p1 − p0) − 2 m0 − m1) t² + (2(p0 − p1) + m0 + m1) t³. */
 static void power_series(double p0, double m0, double p1, double m1, double *c) {
   c[0] = p0;
@@ -325,8 +342,8 @@ void cf_std_table_from_nodes(cf_std_table *tb, const cf_std_node node[CF_STD_TAB
     double h = ldexp(1.0, -j - 1 - cf_std_octave_log2_steps[j]);
     for (int s = cf_std_octave_first[j]; s < cf_std_octave_first[j + 1]; ++s) {
       const cf_std_node *a = &node[s + 1], *b = &node[s]; /* t = 0 at node s + 1 */
-      power_series(a->g, h * a->g_y, b->g, h * b->g_y, tb->step[s].c);
-      power_series(a->g_gamma, h * a->g_y_gamma, b->g_gamma, h * b->g_y_gamma, tb->step[s].d);
+      power_series(a->g, h * a->g_w, b->g, h * b->g_w, tb->step[s].c);
+      power_series(a->g_gamma, h * a->g_w_gamma, b->g_gamma, h * b->g_w_gamma, tb->step[s].d);
     }
   }
 }

@@ -52,12 +52,12 @@ typedef enum cf_std_regime {
 /* What depends on the parameters only (docs/model.md (T1), (T4)). */
 typedef struct cf_std_tail {
   double a2, inv_a2, gamma;
-  double a;             /* γ − 1 */
-  double b2;            /* β² = (γ − 1) α², the slopes' Student scale squared */
-  double inv_b2, inv_a; /* 1/β², 1/a */
-  double k;             /* K = a Γ(a + 1/2) / (√π Γ(a + 1)); K · B(a, 1/2) = 1 */
-  double dlnk_da;       /* d ln K / da = 1/a + ψ(a + 1/2) − ψ(a + 1) */
-  double inv_2a_m1;     /* 1 / (2a − 1) = 1 / (2γ − 3) */
+  double a;         /* γ − 1 */
+  double b2;        /* β² = (γ − 1) α², the slopes' Student scale squared */
+  double inv_a;     /* 1/a */
+  double k;         /* K = a Γ(a + 1/2) / (√π Γ(a + 1)); K · B(a, 1/2) = 1 */
+  double dlnk_da;   /* d ln K / da = 1/a + ψ(a + 1/2) − ψ(a + 1) */
+  double inv_2a_m1; /* 1 / (2a − 1) = 1 / (2γ − 3) */
   cf_std_regime regime;
 } cf_std_tail;
 
@@ -100,12 +100,15 @@ CF_ALWAYS_INLINE cf_std_d std_d(const cf_std_tail *t, double sin2_h, double cos2
   }
   /* with x = tan²θ_h/β², r = 1/(1 + x) and β²/q = r/cos²θ_h, (T1) is
    *   D = r^γ / (π α² cos⁴θ_h),  ln r = −ln(1 + x);
-   * 1/q and 1/cos²θ_h from one division. log(1 + x) carries 1.1e-16 absolute,
-   * γ · 1.1e-16 relative in D: log1p (exact near the peak) from γ = 64 up
-   * (log1p costs 3× log here, test_tailed_lobe bench) */
+   * x from a division of its own, since log and exp follow it on the lobe's
+   * longest chain (M4T's value + gradient 127 against 130 ns with x from
+   * 1/cos²θ_h, cf_eval_batch timed alternately); 1/q and 1/cos²θ_h from one
+   * division. log(1 + x) carries 1.1e-16 absolute, γ · 1.1e-16 relative in
+   * D: log1p (exact near the peak) from γ = 64 up (log1p costs 3× log here,
+   * test_tailed_lobe bench) */
+  double x = sin2_h / (t->b2 * cos2_h);
   double q = sin2_h + t->b2 * cos2_h, inv_qc = 1.0 / (q * cos2_h);
   double inv_cos2 = q * inv_qc, sin2_over_q = sin2_h * cos2_h * inv_qc; /* 1 − r */
-  double x = sin2_h * inv_cos2 * t->inv_b2;
   double ln_r = gamma < CF_STD_GAMMA_LOG1P ? -log(1.0 + x) : -log1p(x);
   d.value = exp(gamma * ln_r) * (inv_cos2 * inv_cos2) * (t->inv_a2 * CF_INV_PI);
   d.d_a2 = d.value * (gamma * sin2_over_q - 1.0) * t->inv_a2;
@@ -154,17 +157,20 @@ cf_std_lobe cf_std_lobe_eval(const cf_std_tail *t, double f0, double weight_d, d
  * masking is GGX's times a function of u and γ alone, because Λ depends on
  * cot θ/α and γ only:
  *   L(c) = √Q g(u; γ),   g(u; γ) = L(c = u; α = 1, γ),   g ≡ 1 at γ = 2.
- * g is tabulated at fixed nodes in y = 1 − u by octaves [2^(−j−1), 2^(−j)],
- * j = 0..45, of 16 (j = 0), 8, 4, 2 or 1 equal steps (to j = 9, 15, 25, 45):
- * g is smooth in u at u = 0 and g − u ∝ (1 − u²)^(γ−1) near u = 1 (singular
- * for γ < 2), which octaves resolve; below y = 2^−46, linear to g = 1 at
- * y = 0. Each step is the cubic Hermite from the values and slopes at its
- * ends; ∂g/∂γ is the same Hermite of the nodes' ∂g/∂γ and ∂²g/∂y∂γ, so
- * every derivative of the tabulated L is the derivative of its value,
- * exactly. The table holds each step's cubics in t (in [0, 1] along the
+ * g is tabulated at fixed nodes in w = 1 − u² = s² α²/Q by octaves
+ * [2^(−j−1), 2^(−j)], j = 0..45, of 16 (j = 0), 8, 4, 2 or 1 equal steps (to
+ * j = 9, 15, 25, 45): g is even in u, so smooth in w at u = 0 (w = 1), and
+ * g − u ∝ w^(γ−1) near u = 1 (singular for γ < 2), which octaves resolve;
+ * below w = 2^−46, linear to g = 1 at w = 0. w needs no square root before
+ * the lookup (√Q is taken beside it): M4T's value + gradient at tail 2.5
+ * 134 against 141 ns with the table in 1 − u (cf_eval_batch, the two builds
+ * timed alternately). Each step is the cubic Hermite from the values and
+ * slopes at its ends; ∂g/∂γ is the same Hermite of the nodes' ∂g/∂γ and
+ * ∂²g/∂w∂γ, so every derivative of the tabulated L is the derivative of its
+ * value, exactly. The table holds each step's cubics in t (in [0, 1] along the
  * step) as power series, evaluated by Horner: 15 % off a tailed M4's
  * evaluation against the Hermite weights (a prototype, 147 against 171 ns).
- * One lookup: the octave from y's exponent bits, the step from its mantissa,
+ * One lookup: the octave from w's exponent bits, the step from its mantissa,
  * 64 bytes. */
 enum {
   CF_STD_TABLE_OCTAVES = 46, /* j = 0..45 */
@@ -173,12 +179,12 @@ enum {
   CF_STD_GRID_GAMMAS = 33 /* the grid's γ nodes (tailed_grid.c) */
 };
 
-/* One node: g, ∂g/∂y, ∂g/∂γ, ∂²g/∂y∂γ. */
+/* One node: g, ∂g/∂w, ∂g/∂γ, ∂²g/∂w∂γ. */
 typedef struct cf_std_node {
-  double g, g_y, g_gamma, g_y_gamma;
+  double g, g_w, g_gamma, g_w_gamma;
 } cf_std_node;
 
-/* One step from node k + 1 (t = 0) to node k (t = 1, y larger): g and
+/* One step from node k + 1 (t = 0) to node k (t = 1, w larger): g and
  * ∂g/∂γ as Σ c_n t^n, Σ d_n t^n. */
 typedef struct cf_std_step {
   double c[4];
@@ -197,12 +203,12 @@ typedef struct cf_std_table {
 void cf_std_table_from_nodes(cf_std_table *tb, const cf_std_node node[CF_STD_TABLE_NODES]);
 
 /* Octave j (0..45) has 2^log2_steps[j] steps and nodes first[j] ..
- * first[j + 1] from y = 2^−j downward; first[46] is the last node, at
- * y = 2^−46. */
+ * first[j + 1] from w = 2^−j downward; first[46] is the last node, at
+ * w = 2^−46. */
 extern const unsigned char cf_std_octave_first[CF_STD_TABLE_OCTAVES + 1];
 extern const unsigned char cf_std_octave_log2_steps[CF_STD_TABLE_OCTAVES];
 
-/* The position y of node k. */
+/* The position w of node k. */
 double cf_std_table_position(int k);
 
 /* The table at γ, from the precomputed grid over γ (tailed_grid.c, written
@@ -221,7 +227,7 @@ void cf_std_table_nodes_exact(cf_std_node node[CF_STD_TABLE_NODES], double gamma
 /* The grid over γ: nodes at p_j = 1/(γ_j − 1) = 1 + (j − 16) Δ, j = 0..32,
  * Δ = (1 − p_0)/16, p_0 = 1/(1e6 − 1): from the Beckmann switch (j = 0)
  * through GGX (j = 16, exactly) to γ = 1.5 + 2.5e-7 (j = 32). Each entry holds
- * h = g f, ∂h/∂y, ∂h/∂p, ∂²h/∂y∂p with f = 1 − p/2, which takes out the
+ * h = g f, ∂h/∂w, ∂h/∂p, ∂²h/∂w∂p with f = 1 − p/2, which takes out the
  * pole 1/(2γ − 3) of g at γ → 1.5. Written from the exact nodes by
  * gen/tailed_grid_gen.c at every build (src/model/CMakeLists.txt). */
 #define CF_STD_GRID_STEP ((1.0 - 1.0 / (CF_STD_GAMMA_BECKMANN - 1.0)) / 16.0)
@@ -233,13 +239,14 @@ static inline double std_grid_f(double gamma) {
 }
 extern const double cf_std_grid[CF_STD_GRID_GAMMAS][CF_STD_TABLE_NODES][4];
 
-/* One node from the exact masking: g, ∂g/∂u, ∂g/∂γ, ∂²g/∂u∂γ at u = c,
- * α = 1 (t prepared at α² = 1), from (T4)-(T5) and their mixed derivative. */
-cf_std_node cf_std_node_exact(const cf_std_tail *t, double c);
+/* One node from the exact masking: g, ∂g/∂u, ∂g/∂γ, ∂²g/∂u∂γ (in the
+ * fields of ∂/∂w) at u = c with s² = 1 − c² given, α = 1 (t prepared at
+ * α² = 1), from (T4)-(T5) and their mixed derivative. */
+cf_std_node cf_std_node_exact(const cf_std_tail *t, double c, double s2);
 
-/* g, ∂g/∂u and ∂g/∂γ at u from the table. */
+/* g, ∂g/∂w and ∂g/∂γ at w from the table. */
 typedef struct cf_std_g {
-  double g, g_u, g_gamma;
+  double g, g_w, g_gamma;
 } cf_std_g;
 
 /* 2^k for −1022 <= k <= 1023, from its bits */
@@ -250,7 +257,7 @@ CF_ALWAYS_INLINE double std_pow2(int k) {
   return x;
 }
 
-/* One step at t: Horner; with_grad: ∂/∂u = −(∂/∂t)/h (inv_h = 1/h) and ∂/∂γ. */
+/* One step at t: Horner; with_grad: ∂/∂w = (∂/∂t)/h (inv_h = 1/h) and ∂/∂γ. */
 CF_ALWAYS_INLINE cf_std_g std_table_step(const cf_std_step *st, double t, double inv_h,
                                          int with_grad) {
   const double *c = st->c, *d = st->d;
@@ -258,55 +265,53 @@ CF_ALWAYS_INLINE cf_std_g std_table_step(const cf_std_step *st, double t, double
   r.g = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
   if (!with_grad) return r;
   r.g_gamma = d[0] + t * (d[1] + t * (d[2] + t * d[3]));
-  r.g_u = -(c[1] + t * (2.0 * c[2] + 3.0 * t * c[3])) * inv_h;
+  r.g_w = (c[1] + t * (2.0 * c[2] + 3.0 * t * c[3])) * inv_h;
   return r;
 }
 
-/* At y = 1 − u: the octave from y's exponent bits, the step from its
+/* At w = 1 − u²: the octave from w's exponent bits, the step from its
  * mantissa (binary64, as everywhere in clayfit); every octave has 2^k
  * steps, so the step's width is an exact power of 2. */
-CF_ALWAYS_INLINE cf_std_g std_table_lookup(const cf_std_table *tb, double y, int with_grad) {
-  if (!(y < 1.0)) /* u = 0 (c = 0): the first node, t = 1 on the first step */
+CF_ALWAYS_INLINE cf_std_g std_table_lookup(const cf_std_table *tb, double w, int with_grad) {
+  if (!(w < 1.0)) /* u = 0 (c = 0): the first node, t = 1 on the first step */
     return std_table_step(&tb->step[0], 1.0, (1 << cf_std_octave_log2_steps[0]) * 2.0, with_grad);
-  if (!(y >= 0x1p-46)) { /* linear to g(y = 0) = 1, ∂g/∂γ = 0; y < 0 (c = 1 + ulp): 0 */
+  if (!(w >= 0x1p-46)) { /* linear to g(w = 0) = 1, ∂g/∂γ = 0; w < 0 (c = 1 + ulp): 0 */
     const cf_std_step *last = &tb->step[CF_STD_TABLE_STEPS - 1];        /* t = 0: the last node */
-    double slope = (last->c[0] - 1.0) * 0x1p46, y0 = y > 0.0 ? y : 0.0; /* ∂g/∂y */
-    return (cf_std_g){1.0 + slope * y0, -slope, last->d[0] * (y0 * 0x1p46)};
+    double slope = (last->c[0] - 1.0) * 0x1p46, w0 = w > 0.0 ? w : 0.0; /* ∂g/∂w */
+    return (cf_std_g){1.0 + slope * w0, slope, last->d[0] * (w0 * 0x1p46)};
   }
   uint64_t bits;
-  memcpy(&bits, &y, sizeof bits);
-  int e = (int)(bits >> 52) - 1023; /* y in [2^e, 2^(e+1)), e from −46 to −1 */
+  memcpy(&bits, &w, sizeof bits);
+  int e = (int)(bits >> 52) - 1023; /* w in [2^e, 2^(e+1)), e from −46 to −1 */
   int j = -e - 1;
-  /* y = (1 + f) 2^e: the step i is f's first k bits, t the rest */
+  /* w = (1 + f) 2^e: the step i is f's first k bits, t the rest */
   const uint64_t fraction_mask = 0xFFFFFFFFFFFFFull, one = 0x3FF0000000000000ull;
   int k = cf_std_octave_log2_steps[j];
   uint64_t f = bits & fraction_mask, t_bits = ((f << k) & fraction_mask) | one;
   int i = (int)(f >> (52 - k));
   double t;
   memcpy(&t, &t_bits, sizeof t);
-  /* steps run from y = 2^−j down */
+  /* steps run from w = 2^−j down */
   const cf_std_step *st = &tb->step[cf_std_octave_first[j] + (1 << k) - i - 1];
   return std_table_step(st, t - 1.0, std_pow2(k - e), with_grad);
 }
 
 /* The masking (T4) from the table (the general regime's L; requires
- * 0 <= c <= 1): L = √Q g, and by the chain rule through u and Q,
- *   ∂L/∂c = (c (1 − α²) g + α² ∂g/∂u / √Q) / √Q,
- *   ∂L/∂α² = s² (g − u ∂g/∂u) / (2 √Q),   ∂L/∂γ = √Q ∂g/∂γ. */
+ * 0 <= c <= 1): L = √Q g(w), w = s² α²/Q, and by the chain rule through w
+ * (∂w/∂c = −2c α²/Q², ∂w/∂α² = s² c²/Q²) and Q,
+ *   ∂L/∂c = c ((1 − α²) g − 2 α² ∂g/∂w / Q) / √Q,
+ *   ∂L/∂α² = s² (g + 2 (c²/Q) ∂g/∂w) / (2 √Q),   ∂L/∂γ = √Q ∂g/∂γ. */
 CF_ALWAYS_INLINE cf_std_masking std_masking_tabulated(const cf_std_table *tb, double a2, double c,
                                                       int with_grad) {
   cf_std_masking m;
   double s2 = (1.0 - c) * (1.0 + c);
-  double sqrt_q = sqrt(a2 + c * c * (1.0 - a2)), sum = sqrt_q + c;
-  /* y = 1 − u = s² α²/(√Q (√Q + c)) without cancellation near u = 1, and
-   * 1/√Q, from one division */
-  double d = 1.0 / (sqrt_q * sum), inv = sum * d;
-  cf_std_g g = std_table_lookup(tb, s2 * a2 * d, with_grad);
+  double q = a2 + c * c * (1.0 - a2), inv_q = 1.0 / q, sqrt_q = sqrt(q);
+  cf_std_g g = std_table_lookup(tb, s2 * a2 * inv_q, with_grad); /* no cancellation at u = 1 */
   m.value = sqrt_q * g.g;
   if (!with_grad) return m;
-  double u = c * inv;
-  m.d_c = inv * (c * (1.0 - a2) * g.g + a2 * inv * g.g_u);
-  m.d_a2 = 0.5 * s2 * inv * (g.g - u * g.g_u);
+  double inv_sqrt_q = sqrt_q * inv_q, g_w_q = g.g_w * inv_q;
+  m.d_c = c * inv_sqrt_q * ((1.0 - a2) * g.g - 2.0 * a2 * g_w_q);
+  m.d_a2 = 0.5 * s2 * inv_sqrt_q * (g.g + 2.0 * c * c * g_w_q);
   m.d_gamma = sqrt_q * g.g_gamma;
   return m;
 }

@@ -3,7 +3,7 @@
  * "The table"). */
 #include "tailed.h"
 
-/* The cubic Hermite in p on [p_j, p_j+1] of one entry column (0: h, 1: ∂h/∂y)
+/* The cubic Hermite in p on [p_j, p_j+1] of one entry column (0: h, 1: ∂h/∂w)
  * with its p-derivative (columns 2 and 3 are their ∂/∂p). */
 static void hermite_p(const double *a, const double *b, int col, double t, double *value,
                       double *d_p) {
@@ -34,9 +34,9 @@ void cf_std_table_build(cf_std_table *tb, double gamma) {
     hermite_p(a, b, 1, t, &hx, &hx_p);
     cf_std_node *n = &node[k];
     n->g = h * inv_f;
-    n->g_y = hx * inv_f;
+    n->g_w = hx * inv_f;
     n->g_gamma = (h_p + 0.5 * n->g) * inv_f * d_p_d_gamma;
-    n->g_y_gamma = (hx_p + 0.5 * n->g_y) * inv_f * d_p_d_gamma;
+    n->g_w_gamma = (hx_p + 0.5 * n->g_w) * inv_f * d_p_d_gamma;
   }
   cf_std_table_from_nodes(tb, node);
 }

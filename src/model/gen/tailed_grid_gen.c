@@ -1,6 +1,6 @@
 /* The STD masking's grid over γ (src/model/tailed.h, cf_std_grid;
  * docs/model.md §2.8, "The table"): the exact nodes at the grid's γ, as
- * h = g f and its derivatives in y and p = 1/(γ − 1), f = 1 − p/2.
+ * h = g f and its derivatives in w and p = 1/(γ − 1), f = 1 − p/2.
  *   tailed_grid_gen OUT.c   writes the grid as C source,
  * at every build (src/model/CMakeLists.txt; tests/fuzz/fuzz.mk): the grid
  * is never stale and never in the tree. In gen/: tests/fuzz/fuzz.mk
@@ -10,7 +10,7 @@
 
 #include "model/tailed.h"
 
-/* The grid's entries at γ node j: h, ∂h/∂y, ∂h/∂p, ∂²h/∂y∂p per node. */
+/* The grid's entries at γ node j: h, ∂h/∂w, ∂h/∂p, ∂²h/∂w∂p per node. */
 static void grid_row(int j, double row[CF_STD_TABLE_NODES][4]) {
   static cf_std_node node[CF_STD_TABLE_NODES];
   double p = std_grid_p(j), gamma = 1.0 + 1.0 / p, f = std_grid_f(gamma), dg_dp = -1.0 / (p * p);
@@ -18,9 +18,9 @@ static void grid_row(int j, double row[CF_STD_TABLE_NODES][4]) {
   for (int k = 0; k < CF_STD_TABLE_NODES; ++k) {
     const cf_std_node *n = &node[k];
     row[k][0] = n->g * f;
-    row[k][1] = n->g_y * f;
+    row[k][1] = n->g_w * f;
     row[k][2] = n->g_gamma * dg_dp * f - 0.5 * n->g;
-    row[k][3] = n->g_y_gamma * dg_dp * f - 0.5 * n->g_y;
+    row[k][3] = n->g_w_gamma * dg_dp * f - 0.5 * n->g_w;
   }
 }
 
