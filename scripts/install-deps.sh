@@ -15,6 +15,8 @@ packages=(
   clang libclang-rt-14-dev           # libFuzzer for the fuzz targets (scripts/fuzz.sh)
   chromium                           # the report's page tested in a real browser
   libxml2-utils                      # xmllint: the MaterialX and Mitsuba presets' tests
+  glslang-tools                      # glslangValidator: the GLSL and Unity (HLSL) shader presets' tests
+  blender                            # Blender 3.4: the Blender preset rendered (tests/export/blender.cmake)
   libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
   slurm-wlm munge                    # the tests' private Slurm cluster (scripts/slurm-local.sh)
 )
@@ -42,6 +44,23 @@ install_gltf_validator() {
   npm install --no-audit --no-fund --prefix "$tools" "gltf-validator@$gltf_validator_version"
 }
 
+# three.js and esbuild for the three.js shader test (tests/export, docs/shaders.md):
+# three renders the exported ShaderMaterial in headless Chromium, esbuild bundles
+# it into a classic script (Chromium refuses ES modules from file://).
+three_version=0.187.0
+esbuild_version=0.28.2
+install_three() {
+  local root tools
+  root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+  tools="$root/build/tools"
+  if [ -f "$tools/node_modules/three/package.json" ] && [ -x "$tools/node_modules/.bin/esbuild" ]; then
+    echo "install-deps: three and esbuild present in $tools/node_modules"
+    return 0
+  fi
+  mkdir -p "$tools"
+  npm install --no-audit --no-fund --prefix "$tools" "three@$three_version" "esbuild@$esbuild_version"
+}
+
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -49,6 +68,7 @@ done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
   install_gltf_validator
+  install_three
   exit 0
 fi
 
@@ -72,3 +92,4 @@ fi
 "${sudo[@]}" apt-get update -qq
 DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 install_gltf_validator
+install_three

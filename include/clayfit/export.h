@@ -13,6 +13,9 @@
  *   blender       a Blender 4 Python script building a Principled BSDF
  *   mitsuba       a Mitsuba 3 scene fragment (diffuse, roughplastic or
  *                 principled)
+ *   glsl, unity   the model exactly, as shaders (docs/shaders.md): a three.js
+ *                 ShaderMaterial module; a folder with a Unity shader,
+ *                 material and .meta files
  * No target has every term of the models of docs/model.md §3: each file says in a
  * comment which parameters map exactly, which approximately and what is
  * dropped, and every value a target cannot take is a warning (never
@@ -35,10 +38,12 @@ typedef enum cf_export_format {
   CF_EXPORT_GLTF,
   CF_EXPORT_BLENDER,
   CF_EXPORT_MITSUBA,
+  CF_EXPORT_GLSL,  /* three.js ShaderMaterial (GLSL ES 3.0), the model exactly */
+  CF_EXPORT_UNITY, /* a folder: Unity built-in pipeline shader, material, .meta */
   CF_EXPORT_FORMAT_COUNT
 } cf_export_format;
 
-/* "json", "mtlx", "mtlx-openpbr", "gltf", "blender", "mitsuba". */
+/* "json", "mtlx", "mtlx-openpbr", "gltf", "blender", "mitsuba", "glsl", "unity". */
 const char *cf_export_format_name(cf_export_format format);
 /* CF_ENOTFOUND (listing the formats) for an unknown name. */
 cf_status cf_export_format_find(const char *name, cf_export_format *format, cf_error *err);

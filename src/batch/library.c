@@ -24,7 +24,8 @@ const char *batch_preset_file(cf_export_format format) {
   static const char *const files[CF_EXPORT_FORMAT_COUNT] = {
       [CF_EXPORT_JSON] = "preset.json",         [CF_EXPORT_MTLX] = "material.mtlx",
       [CF_EXPORT_MTLX_OPENPBR] = "material.openpbr.mtlx", [CF_EXPORT_GLTF] = "material.gltf",
-      [CF_EXPORT_BLENDER] = "material.py",      [CF_EXPORT_MITSUBA] = "material.xml"};
+      [CF_EXPORT_BLENDER] = "material.py",      [CF_EXPORT_MITSUBA] = "material.xml",
+      [CF_EXPORT_GLSL] = "material.three.js",   [CF_EXPORT_UNITY] = "unity"};
   return files[format];
 }
 

@@ -19,12 +19,18 @@ static void export_usage(FILE *out) {
           "  mtlx-openpbr  MaterialX 1.39 open_pbr_surface\n"
           "  gltf          glTF 2.0 .gltf: a sphere with the material (KHR_materials_clearcoat,\n"
           "                _ior, _specular)\n"
-          "  blender       a Blender 4 Python script building a Principled BSDF\n"
+          "  blender       a Blender Python script building a Principled BSDF (v2 in\n"
+          "                Blender 4, v1 in Blender 3.x)\n"
           "  mitsuba       a Mitsuba 3 scene fragment (diffuse, roughplastic or principled)\n"
+          "  glsl          a three.js ShaderMaterial (ES module, GLSL ES 3.0) evaluating the\n"
+          "                model exactly (docs/shaders.md)\n"
+          "  unity         a folder for a Unity project's Assets: a built-in pipeline shader\n"
+          "                (HLSL) evaluating the model exactly, a material, .meta files\n"
           "No target has every term of the models: each file says in a comment (glTF: in\n"
           "asset.extras) what maps exactly, approximately, and what is dropped; a value a\n"
           "target cannot take is a warning on stderr (--quiet silences warnings).\n"
-          "PATH's folder must exist and be writable (checked before FIT.json is read).\n");
+          "PATH's folder must exist and be writable (checked before FIT.json is read);\n"
+          "for unity, PATH is the folder written (created if missing).\n");
 }
 
 int cmd_export(int argc, char **argv, cli_context *ctx) {
@@ -59,7 +65,8 @@ int cmd_export(int argc, char **argv, cli_context *ctx) {
   cf_error err = {0};
   cf_export_format format;
   if (cf_export_format_find(format_text, &format, &err) != CF_OK ||
-      cli_check_output("-o", output, CLI_OUT_FILE, &err) != CF_OK) {
+      cli_check_output("-o", output, format == CF_EXPORT_UNITY ? CLI_OUT_FOLDER : CLI_OUT_FILE,
+                       &err) != CF_OK) {
     cli_report("export", err.message);
     return CLI_EXIT_USAGE;
   }

@@ -15,7 +15,8 @@ static void synth_usage(FILE *out) {
           "                     [--size WxH] [--format png8|png16|exr|jpg] [--quality Q]\n"
           "                     [--response NAME] [--exif-exposures] [--supersample S]\n"
           "                     [--read-noise SIGMA] [--shot-noise K] [--no-noise]\n"
-          "                     [--flash-intensity I] [--silhouettes] [--masks] [--seed N]\n"
+          "                     [--flash-intensity I] [--flash-offset x,y,z] [--silhouettes]\n"
+          "                     [--masks] [--seed N]\n"
           "                     [--reference ALBEDO]\n\n"
           "Renders a clay sphere (radius 1, centre at the origin, z up) on a textured\n"
           "ground inside a textured backdrop, seen by an orbit of N cameras (two rings,\n"
@@ -39,6 +40,8 @@ static void synth_usage(FILE *out) {
           "  --no-noise         neither\n"
           "  --flash-intensity I  radiant intensity (default: a white Lambert surface\n"
           "                     facing the flash at distance 5 has radiance 0.5)\n"
+          "  --flash-offset x,y,z  the flash in camera coordinates (x right, y down, z\n"
+          "                     forward; default 0.3,-0.3,0)\n"
           "  --silhouettes      the capture file asks for the sphere from its silhouettes\n"
           "  --masks            also write DIR/masks/ (the sphere's pixels)\n"
           "  --seed N           textures and noise (default 1)\n"
@@ -111,6 +114,8 @@ static cf_status parse_setting(int c, const char *arg, cf_synth_options *o, cf_e
       return cli_parse_number(arg, "--shot-noise", &o->shot_noise, err);
     case 'I':
       return cli_parse_number(arg, "--flash-intensity", &o->flash_intensity, err);
+    case 'F':
+      return cli_parse_list(arg, "--flash-offset", 3, o->flash_offset, err);
     case 'e':
       s = cli_parse_count(arg, "--seed", 0, 2147483647, &count, err);
       o->seed = (uint64_t)count;
@@ -150,6 +155,7 @@ static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_optio
                                           {"shot-noise", required_argument, NULL, 'k'},
                                           {"no-noise", no_argument, NULL, 'N'},
                                           {"flash-intensity", required_argument, NULL, 'I'},
+                                          {"flash-offset", required_argument, NULL, 'F'},
                                           {"silhouettes", no_argument, NULL, 'g'},
                                           {"masks", no_argument, NULL, 'M'},
                                           {"seed", required_argument, NULL, 'e'},

@@ -4,8 +4,8 @@
 
 #include "export_internal.h"
 
-static const char *const format_names[CF_EXPORT_FORMAT_COUNT] = {"json", "mtlx",    "mtlx-openpbr",
-                                                                 "gltf", "blender", "mitsuba"};
+static const char *const format_names[CF_EXPORT_FORMAT_COUNT] = {
+    "json", "mtlx", "mtlx-openpbr", "gltf", "blender", "mitsuba", "glsl", "unity"};
 
 const char *cf_export_format_name(cf_export_format format) {
   return (unsigned)format < CF_EXPORT_FORMAT_COUNT ? format_names[format] : "unknown";
@@ -19,7 +19,7 @@ cf_status cf_export_format_find(const char *name, cf_export_format *format, cf_e
     }
   return cf_error_set(err, CF_ENOTFOUND,
                       "unknown format '%s' (the formats are json, mtlx, mtlx-openpbr, gltf, "
-                      "blender, mitsuba)",
+                      "blender, mitsuba, glsl, unity)",
                       name);
 }
 
@@ -44,6 +44,10 @@ cf_status cf_export_write(const cf_fit_file *fit, const char *fit_path, cf_expor
       return export_blender(fit, fit_path, path, &notes, err);
     case CF_EXPORT_MITSUBA:
       return export_mitsuba(fit, fit_path, path, &notes, err);
+    case CF_EXPORT_GLSL:
+      return export_glsl(fit, fit_path, path, &notes, err);
+    case CF_EXPORT_UNITY:
+      return export_unity(fit, fit_path, path, &notes, err);
     case CF_EXPORT_FORMAT_COUNT:
       break;
   }

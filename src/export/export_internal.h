@@ -198,5 +198,11 @@ cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const cha
                          export_notes *notes, cf_error *err);
 cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const char *path,
                          export_notes *notes, cf_error *err);
+/* The exact model as shaders (export_shader*.c, docs/shaders.md): a three.js
+ * ES module; a Unity folder (path: the folder, created). */
+cf_status export_glsl(const cf_fit_file *fit, const char *fit_path, const char *path,
+                      export_notes *notes, cf_error *err);
+cf_status export_unity(const cf_fit_file *fit, const char *fit_path, const char *path,
+                       export_notes *notes, cf_error *err);
 
 #endif /* CLAYFIT_EXPORT_INTERNAL_H */

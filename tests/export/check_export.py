@@ -32,6 +32,8 @@ import sys
 import re
 import xml.etree.ElementTree as ET
 
+from principled_inputs import BLENDER4, BLENDER_V1
+
 SKIP = 77
 
 # MaterialX 1.38/1.39 libraries/bxdf/standard_surface.mtlx,
@@ -86,17 +88,6 @@ MITSUBA = {
                    "sheen_tint": "float", "flatness": "float", "clearcoat": "float",
                    "clearcoat_gloss": "float"},
 }
-# Blender 4 Principled BSDF inputs: source/blender/nodes/shader/nodes/
-# node_shader_bsdf_principled.cc (Diffuse Roughness since 4.3)
-BLENDER = {
-    "Base Color", "Metallic", "Roughness", "IOR", "Alpha", "Normal", "Diffuse Roughness",
-    "Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR",
-    "Subsurface Anisotropy", "Specular IOR Level", "Specular Tint", "Anisotropic",
-    "Anisotropic Rotation", "Tangent", "Transmission Weight", "Coat Weight", "Coat Roughness",
-    "Coat IOR", "Coat Tint", "Coat Normal", "Sheen Weight", "Sheen Roughness", "Sheen Tint",
-    "Emission Color", "Emission Strength", "Thin Film Thickness", "Thin Film IOR",
-}
-
 DIRECTIONS = [("0,0,1", "0,0,1"), ("0.5,0,0.866", "-0.342,0,0.94"), ("0.3,0.2,1", "-0.2,0.4,1"),
               ("0.9,0.1,0.3", "0.1,-0.8,0.5"), ("0.2,0,1", "-0.2,0,1")]
 
@@ -178,9 +169,12 @@ def check_blender(path, failures):
     source = open(path, encoding="utf-8").read().replace("import bpy", "bpy = None")
     exec(compile(source, path, "exec"), scope)  # noqa: S102 (our own output; bpy stubbed)
     for name in scope["INPUTS"]:
-        if name not in BLENDER:
+        if name not in BLENDER4:
             failures.append(f"'{name}' is not a Principled BSDF input")
-    print(f"blender inputs: {list(scope['INPUTS'])}")
+    for name in scope["INPUTS_V1"]:
+        if name not in BLENDER_V1:
+            failures.append(f"'{name}' is not a Blender 3.x Principled BSDF input")
+    print(f"blender inputs: {list(scope['INPUTS'])}; 3.x: {list(scope['INPUTS_V1'])}")
 
 
 def node_modules(arg):

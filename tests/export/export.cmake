@@ -70,7 +70,7 @@ clayfit_cli_test(error_export_wrong_type --exit 2
   --stderr "bad/fit.json: params.roughness.value: expected a number, got a string"
   -- ${CLAYFIT} export ${EXPORT_DIR}/bad/fit.json --format gltf -o ${EXPORT_DIR}/never.gltf)
 clayfit_cli_test(error_export_unknown_format --exit 2
-  --stderr "unknown format 'obj' \\(the formats are json, mtlx, mtlx-openpbr, gltf, blender, mitsuba\\)"
+  --stderr "unknown format 'obj' \\(the formats are json, mtlx, mtlx-openpbr, gltf, blender, mitsuba, glsl, unity\\)"
   -- ${CLAYFIT} export ${EXPORT_DIR}/M2/fit.json --format obj -o ${EXPORT_DIR}/never.obj)
 clayfit_cli_test(error_export_no_format --exit 2 --stderr "expected FIT.json --format F -o PATH"
   -- ${CLAYFIT} export ${EXPORT_DIR}/M2/fit.json -o ${EXPORT_DIR}/never.json)
@@ -103,3 +103,5 @@ add_test(NAME cli_export_hostile_names
                  ${CLAYFIT} ${EXPORT_DIR}/M4/fit.json ${CMAKE_CURRENT_BINARY_DIR}/export_hostile)
 set_tests_properties(cli_export_hostile_names PROPERTIES LABELS "cli;export"
                      FIXTURES_REQUIRED export_fits)
+include(${CMAKE_CURRENT_LIST_DIR}/blender.cmake)
+include(${CMAKE_CURRENT_LIST_DIR}/shader.cmake)
