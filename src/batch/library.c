@@ -22,10 +22,14 @@ enum { SMALL_JSON_MAX = 1 << 20 };
 
 const char *batch_preset_file(cf_export_format format) {
   static const char *const files[CF_EXPORT_FORMAT_COUNT] = {
-      [CF_EXPORT_JSON] = "preset.json",         [CF_EXPORT_MTLX] = "material.mtlx",
-      [CF_EXPORT_MTLX_OPENPBR] = "material.openpbr.mtlx", [CF_EXPORT_GLTF] = "material.gltf",
-      [CF_EXPORT_BLENDER] = "material.py",      [CF_EXPORT_MITSUBA] = "material.xml",
-      [CF_EXPORT_GLSL] = "material.three.js",   [CF_EXPORT_UNITY] = "unity"};
+      [CF_EXPORT_JSON] = "preset.json",
+      [CF_EXPORT_MTLX] = "material.mtlx",
+      [CF_EXPORT_MTLX_OPENPBR] = "material.openpbr.mtlx",
+      [CF_EXPORT_GLTF] = "material.gltf",
+      [CF_EXPORT_BLENDER] = "material.py",
+      [CF_EXPORT_MITSUBA] = "material.xml",
+      [CF_EXPORT_GLSL] = "material.three.js",
+      [CF_EXPORT_UNITY] = "unity"};
   return files[format];
 }
 
@@ -49,8 +53,8 @@ int batch_remove_tree(const char *path) {
   return nftw(path, remove_one, 16, FTW_DEPTH | FTW_PHYS);
 }
 
-cf_status batch_tmp_path(const char *library, const char *name, pid_t pid, char *out,
-                         size_t size, cf_error *err) {
+cf_status batch_tmp_path(const char *library, const char *name, pid_t pid, char *out, size_t size,
+                         cf_error *err) {
   int n = snprintf(out, size, "%s/.tmp.%s.%ld", library, name, (long)pid);
   if (n < 0 || (size_t)n >= size) return cf_error_set(err, CF_ERANGE, "%s: path too long", library);
   return CF_OK;
@@ -69,8 +73,7 @@ cf_status batch_replace_entry(const char *library, const char *name, const char 
   if (rename(tmp, entry) != 0) {
     int e = errno;
     if (had_old) rename(old, entry);
-    return cf_error_set(err, CF_EIO, "%s: cannot move %s into place: %s", entry, tmp,
-                        strerror(e));
+    return cf_error_set(err, CF_EIO, "%s: cannot move %s into place: %s", entry, tmp, strerror(e));
   }
   if (had_old && batch_remove_tree(old) != 0)
     return cf_error_set(err, CF_EIO, "%s: cannot delete it: %s", old, strerror(errno));
@@ -144,8 +147,9 @@ static unsigned long long process_start(long pid) {
   if (!p) return 0;
   unsigned long long start = 0;
   /* after ')': state is field 3, starttime field 22 */
-  if (sscanf(p + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %*u %*u %*d %*d %*d %*d %*d "
-                    "%*d %llu",
+  if (sscanf(p + 1,
+             " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %*u %*u %*d %*d %*d %*d %*d "
+             "%*d %llu",
              &start) != 1)
     return 0;
   return start;
@@ -154,9 +158,8 @@ static unsigned long long process_start(long pid) {
 static cf_status write_owner(const char *dir, cf_error *err) {
   char host[256], path[4096];
   batch_host_name(host, sizeof host);
-  json_t *owner = json_pack("{s:o, s:I, s:I}", "host", json_text(host), "pid",
-                            (json_int_t)getpid(), "start_ticks",
-                            (json_int_t)process_start((long)getpid()));
+  json_t *owner = json_pack("{s:o, s:I, s:I}", "host", json_text(host), "pid", (json_int_t)getpid(),
+                            "start_ticks", (json_int_t)process_start((long)getpid()));
   if (!owner) return cf_error_set(err, CF_ENOMEM, "out of memory");
   cf_status s = cf_path_join(dir, "owner.json", path, sizeof path, err);
   if (s == CF_OK) s = json_write_file(owner, path, JSON_INDENT(2), err);
@@ -177,7 +180,8 @@ static int lock_stale(const char *lock, char *holder, size_t size) {
   }
   const char *owner_host = json_string_value(json_object_get(root, "host"));
   long pid = (long)json_integer_value(json_object_get(root, "pid"));
-  unsigned long long start = (unsigned long long)json_integer_value(json_object_get(root, "start_ticks"));
+  unsigned long long start =
+      (unsigned long long)json_integer_value(json_object_get(root, "start_ticks"));
   batch_host_name(host, sizeof host);
   int here = owner_host && strcmp(owner_host, host) == 0;
   int stale = here && pid > 0 && process_start(pid) != start;
@@ -242,8 +246,7 @@ static int leftover_kind(const char *file, char name[CF_BATCH_NAME_MAX + 1]) {
   int old = strncmp(file, ".old.", 5) == 0;
   if (!old && strncmp(file, ".tmp.", 5) != 0) return -1;
   const char *rest = file + 5, *dot = strrchr(rest, '.');
-  if (!dot || dot == rest || dot[1] == '\0' || (size_t)(dot - rest) > CF_BATCH_NAME_MAX)
-    return -1;
+  if (!dot || dot == rest || dot[1] == '\0' || (size_t)(dot - rest) > CF_BATCH_NAME_MAX) return -1;
   for (const char *d = dot + 1; *d; ++d)
     if (*d < '0' || *d > '9') return -1;
   memcpy(name, rest, (size_t)(dot - rest));
