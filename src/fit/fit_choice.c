@@ -95,17 +95,21 @@ const fit_choice_rung *fit_choice_rungs(int *count) {
 /* Fit every candidate to the training part: side by side, each on one
  * thread, when the options give two threads or more (the candidates are
  * independent; a fit's result does not depend on its threads beyond the
- * order of its sums). The GGX models first; then each tailed twin from its
- * GGX twin's fit with the tail at GGX's 2, so that it starts where its
- * twin ended and can only do better (from its own multi-start, M4T ended
- * 12 % above M4's BIC on DiLiGenT, short of its minimum). */
+ * order of its sums). Each tailed twin starts from its GGX twin's fit with
+ * the tail at GGX's 2, so that it starts where its twin ended and can only
+ * do better (from its own multi-start, M4T ended 12 % above M4's BIC on
+ * DiLiGenT, short of its minimum): it runs right after its twin, in the
+ * same work item; but the richest model's twin, whose own twin finishes
+ * last, runs alone afterwards on every thread (DiLiGenT: M4T then takes
+ * 0.12 s instead of 0.21 s, the choice 1.3 s instead of 1.4 s). */
 typedef struct candidate_work {
   const cf_capture *capture;
   const cf_fit_options *options;
   const fit_population *train;
   cf_fit_choice *choice;
   int side_by_side;
-  int order[CF_FIT_MAX_CANDIDATES]; /* the candidates of this phase */
+  int order[CF_FIT_MAX_CANDIDATES]; /* each work item's candidate */
+  int then[CF_FIT_MAX_CANDIDATES];  /* and the one after it in the item, or −1 */
 } candidate_work;
 
 /* The candidate of `choice` that fits `model`, or NULL. */
@@ -115,9 +119,8 @@ static const cf_fit_candidate *candidate_of(const cf_fit_choice *choice, cf_mode
   return NULL;
 }
 
-static void fit_candidate(void *user, int i) {
-  candidate_work *w = user;
-  cf_fit_candidate *c = &w->choice->candidate[w->order[i]];
+static void fit_one_candidate(candidate_work *w, int k) {
+  cf_fit_candidate *c = &w->choice->candidate[k];
   const cf_model_info *info = cf_model_info_get(c->model);
   cf_fit_options o = w->options[c->model];
   o.model = c->model;
@@ -143,6 +146,21 @@ static void fit_candidate(void *user, int i) {
   if (!c->ok) snprintf(c->note, sizeof c->note, "not a candidate: %.200s", err.message);
 }
 
+static void fit_candidate_item(void *user, int i) {
+  candidate_work *w = user;
+  fit_one_candidate(w, w->order[i]);
+  if (w->then[i] >= 0) fit_one_candidate(w, w->then[i]);
+}
+
+/* The candidate whose model is `model`'s tailed twin, or −1. */
+static int tailed_twin_of(const cf_fit_choice *choice, cf_model_id model) {
+  for (int i = 0; i < choice->count; ++i) {
+    const cf_model_info *info = cf_model_info_get(choice->candidate[i].model);
+    if (info->tail_slot >= 0 && info->ggx_twin == model) return i;
+  }
+  return -1;
+}
+
 static void fit_candidates(const cf_capture *capture, const cf_fit_options options[],
                            const fit_population *train, cf_fit_choice *choice) {
   const cf_fit_options *first = &options[0];
@@ -152,15 +170,24 @@ static void fit_candidates(const cf_capture *capture, const cf_fit_options optio
     choice->candidate[i].model = r[i].model;
     choice->candidate[i].physical = r[i].physical;
   }
-  candidate_work work = {capture, options, train, choice, threads >= 2, {0}};
+  candidate_work work = {capture, options, train, choice, threads >= 2, {0}, {0}};
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", 0, (size_t)choice->count);
-  for (int tailed = 0; tailed < 2; ++tailed) {
-    int n = 0;
-    for (int i = choice->count - 1; i >= 0; --i) /* the richest, slowest first */
-      if ((cf_model_info_get(choice->candidate[i].model)->tail_slot >= 0) == tailed)
-        work.order[n++] = i;
-    cf_parallel_for(n, threads, fit_candidate, &work);
+  int n = 0, last = -1;
+  for (int i = choice->count - 1; i >= 0; --i) { /* the richest, slowest first */
+    if (cf_model_info_get(choice->candidate[i].model)->tail_slot >= 0) continue;
+    int twin = tailed_twin_of(choice, choice->candidate[i].model);
+    if (n == 0) last = twin;
+    work.order[n] = i;
+    work.then[n] = n == 0 ? -1 : twin; /* the first's twin runs last */
+    ++n;
+  }
+  cf_parallel_for(n, threads, fit_candidate_item, &work);
+  if (last >= 0) {
+    work.side_by_side = 0;
+    work.order[0] = last;
+    work.then[0] = -1;
+    cf_parallel_for(1, threads, fit_candidate_item, &work);
   }
   if (first->progress)
     first->progress(first->progress_user, "choosing the model", (size_t)choice->count,
