@@ -13,6 +13,10 @@
  *   images/NNN_photo.png, NNN_render.png, NNN_residual.png
  *                       each image's crop around the sphere, 8-bit sRGB
  *                       (written through OpenImageIO);
+ *   viewer/             the fitted material under the capture's lighting:
+ *                       clayfit.png (clayfit's rendering), material.mjs
+ *                       (the glsl export), material.js (it as a classic
+ *                       script) and three_viewer.js (three.js, rotatable);
  *   plots/NAME.svg      residual against half-angle and against view
  *                       angle, the residual histogram, the fitted lobe in
  *                       the plane of incidence for three light angles, the
@@ -46,6 +50,11 @@ typedef struct cf_report_options {
   const char *capture_path;  /* the capture re-rendered, as opened (NULL: the fit's) */
   const char *capture_check; /* how it was found to be the fit's capture, for
                                 report.json (cf_report_compare_captures); NULL: "" */
+  const char *viewer_bundle; /* three.js and the material viewer as one classic
+                                script (clayfit-report-viewer.js, built beside
+                                clayfit), copied into DIR/viewer/; NULL or
+                                unreadable: the page says the interactive view
+                                is absent, and why */
 } cf_report_options;
 
 /* Write the report of `fit` on `capture` into the folder dir, whole or not
@@ -62,9 +71,9 @@ cf_status cf_report_write(const cf_capture *capture, const cf_fit_file *fit, con
 
 /* CF_OK if dir may receive a report: it does not exist (it is created, with
  * its parents), or it is an empty folder, or an earlier report (report.json
- * of clayfit's, and beside it nothing but index.html, images/ *.png and
- * plots/ *.svg). Else CF_EINVAL with what is wrong and what to do: a file,
- * a symbolic link, or a folder holding anything else is never replaced. */
+ * of clayfit's, and beside it nothing but index.html, images/ *.png,
+ * plots/ *.svg and viewer/ *.png, *.js, *.mjs). Else CF_EINVAL with what is wrong and what to do: a
+ * file, a symbolic link, or a folder holding anything else is never replaced. */
 cf_status cf_report_check_dir(const char *dir, cf_error *err);
 
 /* CF_OK if `capture` (opened from capture_path) is the same capture as

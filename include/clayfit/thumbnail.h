@@ -55,7 +55,7 @@ const cf_sphere_light *cf_sphere_lights(void);
  * (an albedo-1 Lambertian sphere facing the key). */
 #define CF_SPHERE_KNEE 0.8
 
-enum { CF_SPHERE_MAX_SIZE = 4096, CF_SPHERE_MAX_SAMPLES = 16 };
+enum { CF_SPHERE_MAX_SIZE = 4096, CF_SPHERE_MAX_SAMPLES = 16, CF_SPHERE_MAX_LIGHTS = 32 };
 
 typedef struct cf_sphere_view {
   int size;             /* pixels per side, 1..CF_SPHERE_MAX_SIZE */
@@ -65,10 +65,17 @@ typedef struct cf_sphere_view {
   double footprint_tolerance; /* of the highlight's integration (cf_footprint_samples);
                                  0: pixel centres only */
   int footprint_max;          /* samples per side at most there, 1..CF_SPHERE_MAX_SAMPLES */
+  /* Other lights than the standard (the report's view of the material under
+   * a capture's lighting): light_count 0..CF_SPHERE_MAX_LIGHTS directional
+   * lights, light_count × 3 unit directions (camera frame) and linear RGB
+   * irradiances, finite and >= 0. 0: the standard light. */
+  int light_count;
+  const double *light_direction, *light_irradiance;
 } cf_sphere_view;
 
 /* The gallery's view: 256 pixels, radius 0.92, background 0.18 (middle
- * grey), 3 × 3 samples at the silhouette, tolerance 2e-3, at most 8. */
+ * grey), 3 × 3 samples at the silhouette, tolerance 2e-3, at most 8; the
+ * standard light. */
 void cf_sphere_view_default(cf_sphere_view *view);
 
 /* Render `model` at `params` (model dim entries, within their ranges:

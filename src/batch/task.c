@@ -58,8 +58,8 @@ static void utc_now(char out[32]) {
 static double cpu_seconds(void) {
   struct rusage u;
   if (getrusage(RUSAGE_SELF, &u) != 0) return 0.0;
-  return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec +
-         (double)u.ru_stime.tv_sec + 1e-6 * (double)u.ru_stime.tv_usec;
+  return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec + (double)u.ru_stime.tv_sec +
+         1e-6 * (double)u.ru_stime.tv_usec;
 }
 
 /* "<tmp>/<file>" */
@@ -102,11 +102,17 @@ static cf_status fit(task *t, const cf_capture *capture, int threads, cf_error *
   char path[4096];
   s = in_tmp(t, "fit.json", path, sizeof path, err);
   if (s == CF_OK) {
-    cf_fit_report report = {capture,       t->entry->capture, &result,
-                            automatic ? &choice : NULL,       CLAYFIT_VERSION,
-                            o->loss,       o->loss_scale,     o->density,
+    cf_fit_report report = {capture,
+                            t->entry->capture,
+                            &result,
+                            automatic ? &choice : NULL,
+                            CLAYFIT_VERSION,
+                            o->loss,
+                            o->loss_scale,
+                            o->density,
                             t->start_wall ? start - t->start_wall : 0.0,
-                            cf_now_seconds() - start,         o->footprint,
+                            cf_now_seconds() - start,
+                            o->footprint,
                             o->footprint_tolerance};
     s = cf_fit_write_json(path, &report, err);
   }
@@ -128,8 +134,7 @@ static cf_status presets(task *t, const cf_fit_file *file, cf_error *err) {
     s = cf_path_join(dir, batch_preset_file((cf_export_format)f), path, sizeof path, err);
     if (s == CF_OK) s = cf_export_write(file, label, (cf_export_format)f, path, &warnings, err);
     for (int i = 0; i < warnings.count; ++i)
-      task_log(t, "%s: warning: %s", cf_export_format_name((cf_export_format)f),
-               warnings.text[i]);
+      task_log(t, "%s: warning: %s", cf_export_format_name((cf_export_format)f), warnings.text[i]);
   }
   return s;
 }
@@ -139,7 +144,7 @@ static cf_status report(task *t, const cf_capture *capture, const cf_fit_file *f
   char dir[4096], label[4096];
   fit_label(t, label, sizeof label);
   cf_status s = in_tmp(t, "report", dir, sizeof dir, err);
-  cf_report_options options = {label, CLAYFIT_VERSION, NULL, NULL, t->entry->capture, ""};
+  cf_report_options options = {label, CLAYFIT_VERSION, NULL, NULL, t->entry->capture, "", NULL};
   if (s == CF_OK) s = cf_report_write(capture, file, dir, &options, err);
   return s;
 }
@@ -201,9 +206,8 @@ static cf_status record(task *t, int threads, double cpu0, const char *reason, c
   utc_now(ended);
   json_t *doc = json_pack(
       "{s:s, s:s, s:s, s:o, s:o, s:s, s:s, s:o, s:s, s:s, s:f, s:f, s:i, s:I}", "name",
-      t->entry->name, "key", t->key, "capture", t->entry->capture,
-      "options", batch_object_or_empty(t->entry->options), "tags",
-      batch_object_or_empty(t->entry->tags),
+      t->entry->name, "key", t->key, "capture", t->entry->capture, "options",
+      batch_object_or_empty(t->entry->options), "tags", batch_object_or_empty(t->entry->tags),
       "clayfit_version", CLAYFIT_VERSION, "build", cf_batch_build_id(), "host", json_text(host),
       "started", t->started, "ended", ended, "wall_seconds", cf_now_seconds() - t->start_wall,
       "cpu_seconds", cpu_seconds() - cpu0, "threads", threads, "pid", (json_int_t)getpid());
@@ -231,8 +235,7 @@ static cf_status fresh_tmp(const task *t, cf_error *err) {
 cf_status cf_batch_task_run(const cf_batch_manifest *m, size_t index, const char *library,
                             const cf_batch_task_options *options, cf_error *err) {
   if (index >= m->count)
-    return cf_error_set(err, CF_ERANGE, "task %zu: the manifest has %zu captures", index,
-                        m->count);
+    return cf_error_set(err, CF_ERANGE, "task %zu: the manifest has %zu captures", index, m->count);
   task t = {.entry = &m->entries[index], .library = library, .log = json_array()};
   if (!t.log) return cf_error_set(err, CF_ENOMEM, "out of memory");
   t.start_wall = cf_now_seconds();

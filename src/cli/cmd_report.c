@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "clayfit/capture.h"
 #include "clayfit/fit_file.h"
@@ -18,12 +19,15 @@ static void report_usage(FILE *out) {
           "capture does not constrain, the model choice, plots (residual against half-angle\n"
           "and view angle, histogram, the fitted lobe, convergence, time) and for every\n"
           "image its photo, the re-rendering with the fitted parameters and a signed residual\n"
-          "heat map; report.json (data_schema/report.schema.json); images/ and plots/.\n"
+          "heat map; report.json (data_schema/report.schema.json); images/ and plots/; and\n"
+          "viewer/: the fitted sphere under the capture's lighting in three.js with the exact\n"
+          "glsl material, rotatable, beside clayfit's rendering (three.js from the bundle\n"
+          "clayfit-report-viewer.js built beside clayfit; without it the page says so).\n"
           "DIR is replaced whole (built beside it, then swapped in): it must be new, empty or\n"
           "an earlier report; any other folder or file is refused.\n\n"
           "  --capture CAPTURE  the capture to re-render (default: the one fit.json names); a\n"
-          "                     copy must match the fit's capture in its lights and colours\n"
-          CLI_IMAGE_MEMORY_USAGE);
+          "                     copy must match the fit's capture in its lights and "
+          "colours\n" CLI_IMAGE_MEMORY_USAGE);
 }
 
 /* Do two paths name the same file? */
@@ -66,6 +70,22 @@ static cf_status load_capture(const cf_fit_file *fit, const char *fit_path, cons
     *capture = NULL;
   }
   return s;
+}
+
+/* The report's three.js bundle, built beside the clayfit binary
+ * (src/report/viewer/viewer.cmake); "" when the binary's path is unknown
+ * (the report then says why its interactive view is absent). */
+static void viewer_bundle(char *path, size_t size) {
+  ssize_t n = readlink("/proc/self/exe", path, size - 1);
+  char *slash = NULL;
+  for (ssize_t i = 0; i < n; ++i)
+    if (path[i] == '/') slash = path + i;
+  const char name[] = "/clayfit-report-viewer.js";
+  if (!slash || (size_t)(slash - path) + sizeof name > size) {
+    path[0] = '\0';
+    return;
+  }
+  memcpy(slash, name, sizeof name);
 }
 
 int cmd_report(int argc, char **argv, cli_context *ctx) {
@@ -112,8 +132,7 @@ int cmd_report(int argc, char **argv, cli_context *ctx) {
   const char *version_warning = cf_fit_file_version_warning(&fit);
   if (version_warning && !ctx->quiet)
     fprintf(stderr, "clayfit report: warning: %s: %s\n", fit_path, version_warning);
-  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "report",
-                                     max_image_bytes};
+  cf_capture_options load_options = {ctx->quiet ? NULL : cli_progress, "report", max_image_bytes};
   cf_capture *capture = NULL;
   const char *check = "";
   s = load_capture(&fit, fit_path, capture_path, &load_options, &capture, &check, &err);
@@ -127,7 +146,11 @@ int cmd_report(int argc, char **argv, cli_context *ctx) {
                                       ctx->quiet ? NULL : cli_progress,
                                       "report",
                                       capture_path ? capture_path : fit.capture_path,
-                                      check};
+                                      check,
+                                      NULL};
+  char bundle[4096];
+  viewer_bundle(bundle, sizeof bundle);
+  report_options.viewer_bundle = bundle;
   s = cf_report_write(capture, &fit, out_dir, &report_options, &err);
   cf_capture_free(capture);
   cf_fit_file_free(&fit);

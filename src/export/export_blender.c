@@ -131,71 +131,33 @@ static double burley_diffuse(double r, double ci, double co, double lv) {
   return ((1.0 - 0.5 * fl) * (1.0 - 0.5 * fv) + rr * (fl + fv + fl * fv * (rr - 1.0))) / EXPORT_PI;
 }
 
-enum { V1_QUADRATURE = 16, V1_ROUGHNESS_STEPS = 20 };
+enum { V1_ROUGHNESS_STEPS = 20 };
+
+/* Burley's diffuse at the Roughness of the variant: *(double *)ctx when it
+ * is fixed (>= 0), else variant / V1_ROUGHNESS_STEPS. */
+static double v1_basis(const void *ctx, int variant, const double l[3], const double v[3]) {
+  double fixed_r = *(const double *)ctx;
+  double r = fixed_r >= 0.0 ? fixed_r : (double)variant / V1_ROUGHNESS_STEPS;
+  return burley_diffuse(r, l[2], v[2], l[0] * v[0] + l[1] * v[1] + l[2] * v[2]);
+}
 
 /* The v1 diffuse that best reproduces the model's: Base Color (per channel)
  * and, where the Roughness is free (M0, M1: no lobe), the Roughness, by least
- * squares over the metric of the tailed lobes' GGX (docs/presets.md): a
- * sphere seen from a view of density c_o, lit from a direction uniform over
- * the hemisphere, pixels f c_i. The target is the model's diffuse alone: its
- * f minus its f at albedo 0 (every model's diffuse vanishes there, its
- * lobes do not depend on the albedo), so a tail's or a lobe's misfit stays
- * out of the colour. Gauss-Legendre 16 x 16 x 16 in (c_o, c_i, phi). *loss is the
- * relative RMS of the diffuse left. It is scene-free; on the fidelity
- * table's scene it takes M2's relative RMSE in Blender 3.4 from 18.3 %
- * (Base Color = albedo) or 8.4 % (albedo (1 - F0)^2) to 5.7 %, M4's from
- * 21.4 % (albedo exp(-2 tau)) to 0.7 % (docs/fidelity.md). */
+ * squares over the metric of the tailed lobes' GGX (docs/presets.md;
+ * export_fit_diffuse_colour). It is scene-free; on the fidelity table's
+ * scene it takes M2's relative RMSE in Blender 3.4 from 18.3 % (Base Color =
+ * albedo) or 8.4 % (albedo (1 - F0)^2) to 5.7 %, M4's from 21.4 % (albedo
+ * exp(-2 tau)) to 0.7 % (docs/fidelity.md). */
 static cf_status v1_diffuse_fit(const cf_fit_file *fit, double fixed_r, double colour[3],
                                 double *roughness, double *loss, cf_error *err) {
-  enum { Q = V1_QUADRATURE };
-  cf_model_id model = fit->result.model;
-  double lobe_params[CF_MAX_DIM];
-  memcpy(lobe_params, fit->result.params, sizeof lobe_params);
-  lobe_params[0] = lobe_params[1] = lobe_params[2] = 0.0; /* albedo: slot 0 of every model */
-  double x[Q], w[Q];
-  export_gauss_legendre01(Q, x, w);
-  double t2[3] = {0}, tb[V1_ROUGHNESS_STEPS + 1][3] = {{0}}, bb[V1_ROUGHNESS_STEPS + 1] = {0};
-  const double n[3] = {0.0, 0.0, 1.0};
-  for (int a = 0; a < Q; ++a) {
-    double co = x[a], v[3] = {sqrt(1.0 - co * co), 0.0, co};
-    for (int b = 0; b < Q; ++b) {
-      double ci = x[b], si = sqrt(1.0 - ci * ci);
-      for (int c = 0; c < Q; ++c) {
-        double phi = EXPORT_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
-        double weight = co * w[a] * w[b] * w[c], f[3], lobes[3];
-        cf_status s = cf_eval(model, fit->result.params, n, l, v, f, NULL);
-        if (s == CF_OK) s = cf_eval(model, lobe_params, n, l, v, lobes, NULL);
-        if (s != CF_OK) {
-          cf_error_prefix(err, "%s", "Blender 3.x diffuse fit");
-          return s;
-        }
-        double lv = l[0] * v[0] + l[1] * v[1] + l[2] * v[2];
-        for (int k = 0; k <= V1_ROUGHNESS_STEPS; ++k) {
-          double r = fixed_r >= 0.0 ? fixed_r : (double)k / V1_ROUGHNESS_STEPS;
-          double beta = ci * burley_diffuse(r, ci, co, lv);
-          bb[k] += weight * beta * beta;
-          for (int ch = 0; ch < 3; ++ch) tb[k][ch] += weight * beta * ci * (f[ch] - lobes[ch]);
-          if (fixed_r >= 0.0) break;
-        }
-        for (int ch = 0; ch < 3; ++ch) {
-          double t = ci * (f[ch] - lobes[ch]);
-          t2[ch] += weight * t * t;
-        }
-      }
-    }
-  }
-  /* the residual of the best colour at roughness k: sum t^2 - (t.b)^2 / b.b */
-  int best = 0;
-  double best_e = INFINITY;
-  for (int k = 0; k <= (fixed_r >= 0.0 ? 0 : V1_ROUGHNESS_STEPS); ++k) {
-    double e = 0.0;
-    for (int ch = 0; ch < 3; ++ch) e += t2[ch] - tb[k][ch] * tb[k][ch] / bb[k];
-    if (e < best_e) best_e = e, best = k;
-  }
-  *roughness = fixed_r >= 0.0 ? fixed_r : (double)best / V1_ROUGHNESS_STEPS;
-  for (int ch = 0; ch < 3; ++ch) colour[ch] = fmin(1.0, fmax(0.0, tb[best][ch] / bb[best]));
-  double total = t2[0] + t2[1] + t2[2];
-  *loss = total > 0.0 ? sqrt(fmax(0.0, best_e) / total) : 0.0;
+  export_diffuse_colour d;
+  cf_status s = export_fit_diffuse_colour(fit, v1_basis, &fixed_r,
+                                          fixed_r >= 0.0 ? 1 : V1_ROUGHNESS_STEPS + 1,
+                                          "Blender 3.x diffuse fit", &d, err);
+  if (s != CF_OK) return s;
+  *roughness = fixed_r >= 0.0 ? fixed_r : (double)d.variant / V1_ROUGHNESS_STEPS;
+  memcpy(colour, d.colour, 3 * sizeof(double));
+  *loss = d.loss;
   return CF_OK;
 }
 

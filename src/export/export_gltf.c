@@ -12,8 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "export_internal.h"
 #include "core/json_reader.h"
+#include "export_internal.h"
 
 enum { SPHERE_RINGS = 32, SPHERE_SEGMENTS = 64 };
 
@@ -102,14 +102,86 @@ static double factor(export_notes *n, const char *name, double x) {
   return y;
 }
 
-static json_t *material_json(const export_material *m, export_notes *n, json_t *used) {
+/* glTF's diffuse per unit colour (the spec's Appendix B, as three.js
+ * r155+ computes it for a punctual light): Lambert, times 1 - F(v.h) of the
+ * specular lobe (fresnel_mix; Schlick from F0 to F90), times 1 - coat
+ * F_coat(n.v) (KHR_materials_clearcoat: F0 0.04, F90 1). */
+typedef struct gltf_diffuse {
+  double f0, f90, coat;
+} gltf_diffuse;
+
+static double schlick(double f0, double f90, double c) {
+  double m = 1.0 - c;
+  return f0 + (f90 - f0) * m * m * m * m * m;
+}
+
+static double gltf_basis(const void *ctx, int variant, const double l[3], const double v[3]) {
+  (void)variant;
+  const gltf_diffuse *g = ctx;
+  double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
+  double len = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+  double vh = len > 0.0 ? (v[0] * h[0] + v[1] * h[1] + v[2] * h[2]) / len : 1.0;
+  return (1.0 - schlick(g->f0, g->f90, vh)) * (1.0 - g->coat * schlick(0.04, 1.0, v[2])) /
+         EXPORT_PI;
+}
+
+/* baseColorFactor: the colour of glTF's diffuse closest to the model's
+ * (export_fit_diffuse_colour). On docs/fidelity.md's scene in three.js it
+ * takes M2 from 13.1 % (albedo) to 6.4 %, M4 (the film as the lobe) from
+ * 20.3 % (albedo exp(-2 tau)) to 4.6 %. */
+static cf_status gltf_colour(const cf_fit_file *fit, const export_material *m, gltf_diffuse g,
+                             export_notes *n, double base[3], cf_error *err) {
+  export_diffuse_colour d;
+  cf_status s = export_fit_diffuse_colour(fit, gltf_basis, &g, 1, "glTF diffuse colour", &d, err);
+  if (s != CF_OK) return s;
+  memcpy(base, d.colour, sizeof d.colour);
+  export_note(n, EXPORT_APPROX,
+              "baseColorFactor %.6g, %.6g, %.6g: the colour of glTF's Lambertian diffuse (times "
+              "1 - F(v.h) and the coat's 1 - F(n.v)) closest to the model's diffuse by least "
+              "squares over the sphere metric of docs/presets.md; what it cannot follow: %.1f %% "
+              "RMS of the diffuse (albedo %.6g, %.6g, %.6g, sigma %.6g rad)",
+              base[0], base[1], base[2], 100.0 * d.loss, m->albedo[0], m->albedo[1], m->albedo[2],
+              m->sigma);
+  return CF_OK;
+}
+
+/* M4 (and M4T as its GGX): the film's lobe as the specular lobe (GGX,
+ * KHR_materials_ior of the film: its F0 exactly); everything under the film
+ * as the diffuse colour; the base's lobe, seen through the film, as the
+ * clear coat. The film as the clear coat (F0 fixed at 0.04) was 39.9 % off
+ * in three.js, this is 4.6 % (docs/fidelity.md). */
+static void clay_lobes(const export_material *m, export_notes *n, json_t *ext, double *roughness,
+                       gltf_diffuse *g) {
+  double eta1 = m->film_ior, t1 = 1.0 - m->film_f0;
+  double tmean = (m->transmittance[0] + m->transmittance[1] + m->transmittance[2]) / 3.0;
+  /* the base's lobe at normal incidence: F0_2 (1 - F0_1)^2 e^(-2 tau) / eta1^2 */
+  double coat = factor(n, "clearcoatFactor", m->base_f0 * t1 * t1 * tmean / (eta1 * eta1) / 0.04);
+  *roughness = m->film_roughness;
+  *g = (gltf_diffuse){m->film_f0, 1.0, coat};
+  json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", eta1));
+  json_object_set_new(ext, "KHR_materials_clearcoat",
+                      json_pack("{s:f, s:f}", "clearcoatFactor", coat, "clearcoatRoughnessFactor",
+                                m->base_roughness));
+  export_note(n, EXPORT_EXACT,
+              "the film's lobe -> roughnessFactor = film_roughness %.6g (GGX, alpha = r^2), "
+              "KHR_materials_ior ior = the film's IOR %.6g (F0 = film_f0 %.6g)",
+              m->film_roughness, eta1, m->film_f0);
+  export_note(n, EXPORT_APPROX,
+              "the base's lobe -> clearcoatFactor = base_f0 (1 - film_f0)^2 mean(exp(-2 tau)) / "
+              "eta1^2 / 0.04 = %.6g (its reflectance at normal incidence through the film), "
+              "clearcoatRoughnessFactor = base_roughness %.6g: not refracted, no tint",
+              coat, m->base_roughness);
+}
+
+static cf_status material_json(const cf_fit_file *fit, const export_material *m, export_notes *n,
+                               json_t *used, json_t **material, cf_error *err) {
   json_t *ext = json_object();
   double base[3], roughness = 1.0;
-  memcpy(base, m->albedo, sizeof base);
+  gltf_diffuse g = {0.0, 0.0, 0.0};
   if (m->model != CF_MODEL_LAMBERT)
     export_note(n, EXPORT_DROPPED,
                 "diffuse_roughness sigma %.6g rad: glTF's diffuse is Lambertian (no ratified "
-                "extension has diffuse roughness)",
+                "extension has diffuse roughness); the colour below absorbs what it can",
                 m->sigma);
   if (m->model == CF_MODEL_LAMBERT || m->model == CF_MODEL_OREN_NAYAR) {
     json_object_set_new(ext, "KHR_materials_specular", json_pack("{s:f}", "specularFactor", 0.0));
@@ -118,64 +190,47 @@ static json_t *material_json(const export_material *m, export_notes *n, json_t *
                 "dielectric Fresnel, grazing term included, to 0: the diffuse alone remains)",
                 m->info->code);
   } else if (m->model == CF_MODEL_CLAY) {
-    double coat = m->film_f0 / 0.04;
-    roughness = m->base_roughness;
-    for (int c = 0; c < 3; ++c) base[c] *= m->transmittance[c];
-    json_object_set_new(ext, "KHR_materials_clearcoat",
-                        json_pack("{s:f, s:f}", "clearcoatFactor",
-                                  factor(n, "clearcoatFactor = film_f0 / 0.04", coat),
-                                  "clearcoatRoughnessFactor", m->film_roughness));
-    json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->base_ior_rel));
-    json_object_set_new(ext, "KHR_materials_specular",
-                        json_pack("{s:f, s:o}", "specularFactor", 1.0, "specularColorFactor",
-                                  rgb(m->transmittance, 0)));
-    export_note(n, EXPORT_EXACT,
-                "film_roughness %.6g -> clearcoatRoughnessFactor (GGX, alpha = r^2)",
-                m->film_roughness);
-    export_note(n, EXPORT_APPROX,
-                "film_f0 %.6g: the clear coat's F0 is fixed at 0.04 (IOR 1.5), so "
-                "clearcoatFactor = film_f0 / 0.04 = %.6g gives the film's reflectance at normal "
-                "incidence; at grazing angles the coat reflects clearcoatFactor times too little",
-                m->film_f0, coat);
-    export_note(n, EXPORT_APPROX,
-                "the film's colour exp(-2 tau) multiplies baseColorFactor (albedo x "
-                "transmittance) and is KHR_materials_specular's specularColorFactor (the base "
-                "lobe seen through the film): glTF's clear coat has no tint");
-    export_note(n, EXPORT_APPROX,
-                "base lobe: roughnessFactor = base_roughness %.6g, KHR_materials_ior ior = the "
-                "relative IOR %.6g (glTF evaluates the base as in air under the coat, so its F0 "
-                "is base_f0 %.6g), not at the refracted directions",
-                m->base_roughness, m->base_ior_rel, m->base_f0);
+    clay_lobes(m, n, ext, &roughness, &g);
   } else {
     roughness = m->roughness;
+    g = (gltf_diffuse){m->f0, 1.0, 0.0};
     json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->ior));
     export_note(n, EXPORT_EXACT,
                 "roughness %.6g -> roughnessFactor, f0 %.6g -> KHR_materials_ior ior %.6g: glTF's "
                 "specular lobe is clayfit's (GGX, height-correlated Smith, Schlick on v.h)",
                 m->roughness, m->f0, m->ior);
-    export_note(n, EXPORT_APPROX,
-                "glTF's fresnel_mix scales the diffuse by 1 - F(v.h) instead of "
-                "(1 - F(c_i))(1 - F(c_o))");
     if (m->model == CF_MODEL_CLEARCOAT) {
-      double weight = m->ggx_coat_weight, r = m->ggx_coat_roughness;
+      double weight, r, loss;
+      cf_status s = export_coat_ggx_fit(fit, &weight, &r, &loss, err);
+      if (s != CF_OK) {
+        json_decref(ext);
+        return s;
+      }
+      g.coat = weight = factor(n, "clearcoatFactor", weight);
       json_object_set_new(
           ext, "KHR_materials_clearcoat",
           json_pack("{s:f, s:f}", "clearcoatFactor", weight, "clearcoatRoughnessFactor", r));
       export_note(n, EXPORT_APPROX,
-                  "Burley's clear coat (GTR1 width a = %.6g) -> clearcoatFactor = 0.25 "
-                  "coat_weight = %.6g (the same F0 0.04), clearcoatRoughnessFactor = sqrt(a) = "
-                  "%.6g: a GGX lobe without GTR1's tail, which also darkens the base",
-                  m->gtr1_a, weight, r);
+                  "Burley's clear coat (coat_weight %.6g, GTR1 width a = %.6g) -> the GGX coat "
+                  "closest to it by least squares over the sphere metric: clearcoatFactor %.6g, "
+                  "clearcoatRoughnessFactor %.6g (%.1f %% RMS of the coat left; 0.25 coat_weight "
+                  "and sqrt(a) were 16.4 %% off in three.js, docs/fidelity.md); it also darkens "
+                  "the base",
+                  m->coat_weight, m->gtr1_a, weight, r, 100.0 * loss);
     }
+  }
+  cf_status s = gltf_colour(fit, m, g, n, base, err);
+  if (s != CF_OK) {
+    json_decref(ext);
+    return s;
   }
   const char *key;
   json_t *value;
   json_object_foreach(ext, key, value) json_array_append_new(used, json_string(key));
-  json_t *material =
-      json_pack("{s:s, s:{s:o, s:f, s:f}, s:o}", "name", m->info->name, "pbrMetallicRoughness",
-                "baseColorFactor", rgb(base, 1), "metallicFactor", 0.0, "roughnessFactor",
-                roughness, "extensions", ext);
-  return material;
+  *material = json_pack("{s:s, s:{s:o, s:f, s:f}, s:o}", "name", m->info->name,
+                        "pbrMetallicRoughness", "baseColorFactor", rgb(base, 1), "metallicFactor",
+                        0.0, "roughnessFactor", roughness, "extensions", ext);
+  return CF_OK;
 }
 
 static json_t *notes_json(const export_notes *n) {
@@ -197,7 +252,13 @@ cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *
   if (s_map != CF_OK) return s_map;
   export_common_notes(notes, &m);
   json_t *used = json_array();
-  json_t *material = material_json(&m, notes, used);
+  json_t *material = NULL;
+  cf_status s_mat = material_json(fit, &m, notes, used, &material, err);
+  if (s_mat != CF_OK) {
+    json_decref(used);
+    cf_error_prefix(err, "%s", path);
+    return s_mat;
+  }
   sphere_mesh s = {0};
   if (!make_sphere(&s)) {
     json_decref(used);

@@ -99,7 +99,8 @@ void export_gauss_legendre01(int n, double *x, double *w);
 typedef struct export_tail_quadrature {
   int views, thetas, phis;
 } export_tail_quadrature;
-#define EXPORT_TAIL_QUADRATURE {32, 32, 12}
+#define EXPORT_TAIL_QUADRATURE \
+  { 32, 32, 12 }
 
 typedef struct export_tail_fit {
   double r, f0;      /* the GGX fitted */
@@ -142,6 +143,31 @@ void export_ggx_loss_text(double rms_loss, char *text, size_t size);
 void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
                         double r_ggx, double f0_ggx, double rms_loss);
 
+/* ---- the diffuse colour a target's diffuse needs (docs/presets.md) ----
+ * A target's diffuse per unit colour, for one of `variants` settings (e.g.
+ * Blender 3's Roughness steps), at light l and view v about n = (0, 0, 1):
+ * beta / colour of its BRDF, the same for every channel. */
+typedef double (*export_diffuse_basis)(const void *ctx, int variant, const double l[3],
+                                       const double v[3]);
+typedef struct export_diffuse_colour {
+  double colour[3]; /* in [0, 1] */
+  int variant;      /* the best of the variants */
+  double loss;      /* relative RMS of the model's diffuse left */
+} export_diffuse_colour;
+/* The colour (per channel) and variant by least squares against the model's
+ * diffuse alone (its f minus its f at albedo 0), over a sphere seen from a
+ * view of density c_o lit from a direction uniform over the hemisphere,
+ * pixels f c_i: Gauss-Legendre 16^3 in (c_o, c_i, phi). `what` prefixes an
+ * error of the model's evaluation. */
+cf_status export_fit_diffuse_colour(const cf_fit_file *fit, export_diffuse_basis basis,
+                                    const void *ctx, int variants, const char *what,
+                                    export_diffuse_colour *out, cf_error *err);
+/* M3's clear coat (Burley's GTR1, its Schlick F of F0 0.04) as the GGX coat
+ * of glTF (F0 0.04, height-correlated Smith): the weight and roughness of
+ * least squares over the sphere metric, and the relative RMS of the coat
+ * left. */
+cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *roughness,
+                              double *loss, cf_error *err);
 /* A tailed lobe of the fit and the GGX written for it (export_ggx_from_tailed). */
 typedef struct export_tailed_lobe {
   char name[192]; /* for the note: "the specular lobe" */

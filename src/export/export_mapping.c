@@ -715,3 +715,159 @@ void export_note_tailed(export_notes *n, const char *lobe, double r, double gamm
               "squares as a renderer sees it (docs/presets.md): roughness %.6g, F0 %.6g; %s",
               lobe, r, gamma, f0, r_ggx, f0_ggx, loss);
 }
+
+/* ---- the diffuse colour a target's diffuse needs ---- */
+
+enum { DIFFUSE_QUADRATURE = 16, DIFFUSE_MAX_VARIANTS = 32 };
+
+/* Accumulates sum w t^2, sum w t beta_k and sum w beta_k^2 (t the model's
+ * diffuse times c_i, beta_k the target's per unit colour) over the metric. */
+typedef struct diffuse_sums {
+  double t2[3], tb[DIFFUSE_MAX_VARIANTS][3], bb[DIFFUSE_MAX_VARIANTS];
+} diffuse_sums;
+
+static cf_status diffuse_accumulate(const cf_fit_file *fit, export_diffuse_basis basis,
+                                    const void *ctx, int variants, diffuse_sums *s) {
+  enum { Q = DIFFUSE_QUADRATURE };
+  cf_model_id model = fit->result.model;
+  double lobe_params[CF_MAX_DIM];
+  memcpy(lobe_params, fit->result.params, sizeof lobe_params);
+  lobe_params[0] = lobe_params[1] = lobe_params[2] = 0.0; /* albedo: slot 0 of every model */
+  double x[Q], w[Q];
+  export_gauss_legendre01(Q, x, w);
+  const double n[3] = {0.0, 0.0, 1.0};
+  for (int a = 0; a < Q; ++a) {
+    double co = x[a], v[3] = {sqrt(1.0 - co * co), 0.0, co};
+    for (int b = 0; b < Q; ++b) {
+      double ci = x[b], si = sqrt(1.0 - ci * ci);
+      for (int c = 0; c < Q; ++c) {
+        double phi = EXPORT_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
+        double weight = co * w[a] * w[b] * w[c], f[3], lobes[3];
+        cf_status st = cf_eval(model, fit->result.params, n, l, v, f, NULL);
+        if (st == CF_OK) st = cf_eval(model, lobe_params, n, l, v, lobes, NULL);
+        if (st != CF_OK) return st;
+        for (int k = 0; k < variants; ++k) {
+          double beta = ci * basis(ctx, k, l, v);
+          s->bb[k] += weight * beta * beta;
+          for (int ch = 0; ch < 3; ++ch) s->tb[k][ch] += weight * beta * ci * (f[ch] - lobes[ch]);
+        }
+        for (int ch = 0; ch < 3; ++ch) {
+          double t = ci * (f[ch] - lobes[ch]);
+          s->t2[ch] += weight * t * t;
+        }
+      }
+    }
+  }
+  return CF_OK;
+}
+
+/* The model's diffuse is what remains of f when the albedo is 0 removed:
+ * every model's diffuse vanishes there and its lobes do not depend on the
+ * albedo, so a lobe's misfit (a tail's GGX) stays out of the colour. */
+cf_status export_fit_diffuse_colour(const cf_fit_file *fit, export_diffuse_basis basis,
+                                    const void *ctx, int variants, const char *what,
+                                    export_diffuse_colour *out, cf_error *err) {
+  if (variants < 1 || variants > DIFFUSE_MAX_VARIANTS)
+    return cf_error_set(err, CF_ERANGE, "%s: %d variants, at most %d", what, variants,
+                        DIFFUSE_MAX_VARIANTS);
+  diffuse_sums *s = calloc(1, sizeof *s);
+  if (!s) return cf_error_set(err, CF_ENOMEM, "%s: out of memory", what);
+  cf_status st = diffuse_accumulate(fit, basis, ctx, variants, s);
+  if (st != CF_OK) {
+    free(s);
+    cf_error_set(err, st, "%s: the model's evaluation failed", what);
+    return st;
+  }
+  /* the residual of the best colour of variant k: sum t^2 - (t.b)^2 / b.b */
+  int best = 0;
+  double best_e = INFINITY;
+  for (int k = 0; k < variants; ++k) {
+    double e = 0.0;
+    for (int ch = 0; ch < 3; ++ch) e += s->t2[ch] - s->tb[k][ch] * s->tb[k][ch] / s->bb[k];
+    if (e < best_e) best_e = e, best = k;
+  }
+  out->variant = best;
+  for (int ch = 0; ch < 3; ++ch)
+    out->colour[ch] = fmin(1.0, fmax(0.0, s->tb[best][ch] / s->bb[best]));
+  double total = s->t2[0] + s->t2[1] + s->t2[2];
+  out->loss = total > 0.0 ? sqrt(fmax(0.0, best_e) / total) : 0.0;
+  free(s);
+  return CF_OK;
+}
+
+/* ---- M3's clear coat (Burley's GTR1) as a GGX coat ---- */
+
+enum { COAT_VIEWS = 24, COAT_THETAS = 64, COAT_PHIS = 32, COAT_STEPS = 40 };
+#define COAT_THETA_SCALE 0.05 /* tan θ_h = s tan(π u / 2): nodes dense near the peak */
+
+static double coat_schlick(double c) {
+  double m = 1.0 - c;
+  return 0.04 + 0.96 * m * m * m * m * m;
+}
+
+/* glTF's GGX coat per unit clearcoatFactor (three.js' BRDF_GGX_Clearcoat):
+ * F_Schlick(0.04, 1, v.h) D V, height-correlated Smith, alpha = r^2. */
+static double coat_ggx(double r, double ci, double co, double ch, double vh) {
+  double a2 = r * r * r * r, d = ch * ch * (a2 - 1.0) + 1.0;
+  double gv = ci * sqrt(co * co * (1.0 - a2) + a2), gl = co * sqrt(ci * ci * (1.0 - a2) + a2);
+  return coat_schlick(vh) * a2 / (EXPORT_PI * d * d) * 0.5 / (gv + gl);
+}
+
+static double coat_roughness(int k) {
+  return 0.05 + 0.95 * k / (COAT_STEPS - 1);
+}
+
+/* Least squares over the sphere metric of docs/presets.md (a view of density
+ * c_o, the light uniform over the hemisphere, pixels f c_i) with the light
+ * reached through the half vector (dω_i = 4 (v.h) dω_h) so that the sharp
+ * lobes are resolved: the model's coat (its f minus its f at coat_weight 0,
+ * mean of the channels) against the GGX coat of roughness r_k times a weight
+ * by closed form; the best r_k. */
+cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *roughness,
+                              double *loss, cf_error *err) {
+  double xv[COAT_VIEWS], wv[COAT_VIEWS], xt[COAT_THETAS], wt[COAT_THETAS], xp[COAT_PHIS],
+      wp[COAT_PHIS];
+  export_gauss_legendre01(COAT_VIEWS, xv, wv);
+  export_gauss_legendre01(COAT_THETAS, xt, wt);
+  export_gauss_legendre01(COAT_PHIS, xp, wp);
+  double no_coat[CF_MAX_DIM], tt = 0.0, tb[COAT_STEPS] = {0}, bb[COAT_STEPS] = {0};
+  memcpy(no_coat, fit->result.params, sizeof no_coat);
+  no_coat[CF_CLEARCOAT_COAT_WEIGHT] = 0.0;
+  const double n[3] = {0.0, 0.0, 1.0};
+  for (int a = 0; a < COAT_VIEWS; ++a) {
+    double co = xv[a], v[3] = {sqrt(1.0 - co * co), 0.0, co};
+    for (int b = 0; b < COAT_THETAS; ++b) {
+      double q = 0.5 * EXPORT_PI * xt[b], tq = tan(q);
+      double th = atan(COAT_THETA_SCALE * tq);
+      double dth = COAT_THETA_SCALE * 0.5 * EXPORT_PI / (cos(q) * cos(q)) /
+                   (1.0 + COAT_THETA_SCALE * COAT_THETA_SCALE * tq * tq);
+      for (int c = 0; c < COAT_PHIS; ++c) {
+        double phi = EXPORT_PI * xp[c]; /* [0, π]: the lobe is even in φ_h */
+        double h[3] = {sin(th) * cos(phi), sin(th) * sin(phi), cos(th)};
+        double vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
+        double l[3] = {2.0 * vh * h[0] - v[0], 2.0 * vh * h[1] - v[1], 2.0 * vh * h[2] - v[2]};
+        if (vh <= 0.0 || l[2] <= 1e-9) continue;
+        double ci = l[2], f[3], base[3];
+        double w = co * wv[a] * wt[b] * dth * sin(th) * EXPORT_PI * wp[c] * 4.0 * vh;
+        cf_status s = cf_eval(fit->result.model, fit->result.params, n, l, v, f, NULL);
+        if (s == CF_OK) s = cf_eval(fit->result.model, no_coat, n, l, v, base, NULL);
+        if (s != CF_OK)
+          return cf_error_set(err, s, "the GGX coat fit: the model's evaluation failed");
+        double t = ci * (f[0] + f[1] + f[2] - base[0] - base[1] - base[2]) / 3.0;
+        tt += w * t * t;
+        for (int k = 0; k < COAT_STEPS; ++k) {
+          double g = ci * coat_ggx(coat_roughness(k), ci, co, h[2], vh);
+          tb[k] += w * t * g;
+          bb[k] += w * g * g;
+        }
+      }
+    }
+  }
+  int best = 0;
+  for (int k = 1; k < COAT_STEPS; ++k)
+    if (tb[k] * tb[k] / bb[k] > tb[best] * tb[best] / bb[best]) best = k;
+  *roughness = coat_roughness(best);
+  *weight = fmax(0.0, tb[best] / bb[best]);
+  *loss = tt > 0.0 ? sqrt(fmax(0.0, tt - tb[best] * tb[best] / bb[best]) / tt) : 0.0;
+  return CF_OK;
+}

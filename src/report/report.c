@@ -55,8 +55,9 @@ static int has_suffix(const char *name, const char *suffix) {
 }
 
 /* The first entry of folder `path` that a report does not hold (into
- * `which`): in DIR only index.html, report.json, images/ and plots/, in
- * images/ only .png files, in plots/ only .svg files; none of them a
+ * `which`): in DIR only index.html, report.json, images/, plots/ and
+ * viewer/, in images/ only .png files, in plots/ only .svg files, in viewer/
+ * only .png, .js and .mjs files; none of them a
  * symbolic link. 1 when there is one, 0 when there is none, -1 when the
  * folder cannot be read. */
 static int foreign_entry(const char *path, const char *sub, char *which, size_t size) {
@@ -76,7 +77,12 @@ static int foreign_entry(const char *path, const char *sub, char *which, size_t 
     int ours;
     if (!sub)
       ours = ((strcmp(name, "index.html") == 0 || strcmp(name, "report.json") == 0) && is_file) ||
-             ((strcmp(name, "images") == 0 || strcmp(name, "plots") == 0) && is_dir);
+             ((strcmp(name, "images") == 0 || strcmp(name, "plots") == 0 ||
+               strcmp(name, "viewer") == 0) &&
+              is_dir);
+    else if (strcmp(sub, "viewer") == 0)
+      ours = is_file &&
+             (has_suffix(name, ".png") || has_suffix(name, ".js") || has_suffix(name, ".mjs"));
     else
       ours = is_file && has_suffix(name, strcmp(sub, "images") == 0 ? ".png" : ".svg");
     if (!ours) {
@@ -99,12 +105,12 @@ static int is_report_json(const char *dir) {
   return got > 0 && strstr(head, "\"clayfit_report\"") != NULL;
 }
 
-/* The files in dir, dir/images and dir/plots (an earlier clayfit left the
- * two folders empty when it failed). */
+/* The files in dir, dir/images, dir/plots and dir/viewer (an earlier
+ * clayfit left the folders empty when it failed). */
 static size_t count_files(const char *dir) {
-  static const char *const subs[] = {"", "/images", "/plots"};
+  static const char *const subs[] = {"", "/images", "/plots", "/viewer"};
   size_t files = 0;
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 4; ++k) {
     char folder[4200];
     snprintf(folder, sizeof folder, "%s%s", dir, subs[k]);
     DIR *d = opendir(folder);
@@ -140,8 +146,9 @@ cf_status cf_report_check_dir(const char *dir, cf_error *err) {
                         dir);
   char which[1100];
   int foreign = foreign_entry(path, NULL, which, sizeof which);
-  for (int k = 0; foreign == 0 && k < 2; ++k) {
-    const char *sub = k ? "plots" : "images";
+  static const char *const subs[] = {"images", "plots", "viewer"};
+  for (int k = 0; foreign == 0 && k < 3; ++k) {
+    const char *sub = subs[k];
     char folder[4200];
     snprintf(folder, sizeof folder, "%s/%s", path, sub);
     if (cf_path_exists(folder)) foreign = foreign_entry(path, sub, which, sizeof which);
@@ -241,12 +248,17 @@ static cf_status write_parts(const cf_capture *capture, const cf_fit_file *fit, 
     s = report_image(&d, k, dir, files[k], err);
   }
   if (s == CF_OK) progress(options, "writing images", d.images, d.images);
+  report_view view;
+  if (s == CF_OK) progress(options, "writing the material's view", 0, 1);
+  if (s == CF_OK) s = report_view_scene(&d, &view, err);
+  if (s == CF_OK)
+    s = report_view_write(&d, dir, fit_path, options ? options->viewer_bundle : NULL, &view, err);
   if (s == CF_OK) progress(options, "writing plots and the page", 0, 3);
   if (s == CF_OK) s = report_write_plots(&d, dir, err);
   if (s == CF_OK) progress(options, "writing plots and the page", 1, 3);
   if (s == CF_OK) s = report_write_json(&d, dir, fit_path, version, files, err);
   if (s == CF_OK) progress(options, "writing plots and the page", 2, 3);
-  if (s == CF_OK) s = report_write_html(&d, dir, fit_path, version, files, err);
+  if (s == CF_OK) s = report_write_html(&d, dir, fit_path, version, files, &view, err);
   if (s == CF_OK) progress(options, "writing plots and the page", 3, 3);
   free(files);
   report_data_free(&d);

@@ -38,6 +38,7 @@ static void head(FILE *f, const report_data *d, const char *fit_path, const char
       "text-align:right}th{background:#f0f0f0}td.l,th.l{text-align:left}\n"
       ".images{display:grid;grid-template-columns:repeat(3,auto) 1fr;gap:6px;align-items:center}"
       "\n.images img{max-width:300px;image-rendering:pixelated}.plots img{margin:4px}\n"
+      ".viewer{display:flex;gap:12px;align-items:flex-start}.viewer canvas{cursor:grab}\n"
       "tr.chosen td{font-weight:bold}.warn{color:#a04000}\n</style></head><body>\n",
       f);
   fputs("<h1>clayfit report</h1>\n<p>Fit <code>", f);
@@ -248,7 +249,8 @@ static void choice_table(FILE *f, const report_data *d) {
     fputs(".</p>\n", f);
   }
   /* a tailed choice: what GGX's lobe would cost (its twin's row) */
-  const char *ggx_cost = json_string_value(json_object_get(json_object_get(choice, "ggx_cost"), "meaning"));
+  const char *ggx_cost =
+      json_string_value(json_object_get(json_object_get(choice, "ggx_cost"), "meaning"));
   if (ggx_cost) {
     fputs("<p>", f);
     html(f, ggx_cost);
@@ -372,12 +374,14 @@ static void load_check(FILE *f) {
 }
 
 cf_status report_write_html(const report_data *d, const char *dir, const char *fit_path,
-                            const char *version, char (*image_files)[3][64], cf_error *err) {
+                            const char *version, char (*image_files)[3][64],
+                            const report_view *view, cf_error *err) {
   char path[4096];
   snprintf(path, sizeof path, "%s/index.html", dir);
   FILE *f = fopen(path, "w");
   if (!f) return cf_error_set(err, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
   head(f, d, fit_path, version);
+  report_view_html(f, d, view);
   parameter_table(f, d);
   residual_summary(f, d);
   gains_table(f, d);

@@ -9,8 +9,11 @@
 #include <jansson.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "clayfit/report.h"
+#include "clayfit/thumbnail.h"
+#include "core/text_escape.h"
 #include "svg.h"
 
 enum { REPORT_CENSORED = 1u << 0, REPORT_REJECTED = 1u << 1 };
@@ -30,16 +33,16 @@ typedef struct report_data {
   double loss_scale;          /* in σ */
   /* per image */
   size_t *censored, *rejected, *observations;
-  size_t *first, *last; /* the range of observations holding image k's
-                           (the capture lists them image by image) */
-  double *rms_sigma;    /* RMS of residual, σ units */
+  size_t *first, *last;       /* the range of observations holding image k's
+                                 (the capture lists them image by image) */
+  double *rms_sigma;          /* RMS of residual, σ units */
   size_t *rejected_region;    /* the observations in the image's largest 8-connected
                                  region (in its pixel grid) of REPORT_REJECTED ones */
   size_t *rejected_clustered; /* those in its regions of REPORT_CLUSTER_PX or more */
-  const char *capture_path;  /* the capture re-rendered */
-  const char *capture_check; /* how it was checked to be the fit's (cf_report_options) */
-  const json_t *doc;    /* fit.json as cf_fit_file_read parsed it (the fit's; for the
-                           choice, solver, timings); may be NULL */
+  const char *capture_path;   /* the capture re-rendered */
+  const char *capture_check;  /* how it was checked to be the fit's (cf_report_options) */
+  const json_t *doc;          /* fit.json as cf_fit_file_read parsed it (the fit's; for the
+                                 choice, solver, timings); may be NULL */
 } report_data;
 
 /* A region of rejected observations this large is a cluster, not chance:
@@ -90,10 +93,34 @@ cf_status report_write_plots(const report_data *d, const char *dir, cf_error *er
 extern const report_plot report_response_plot_info;
 cf_status report_response_plot(const report_data *d, const char *dir, cf_error *err);
 
+/* The fitted material's view (report_viewer.c): the capture's lighting at
+ * one image's observation facing the camera, as at most
+ * CF_SPHERE_MAX_LIGHTS directional lights in that camera's frame, exposed
+ * for display. */
+enum { REPORT_VIEW_SIZE = 256 }; /* pixels per side, both renderings */
+typedef struct report_view {
+  size_t image;    /* the image whose camera and lights are taken */
+  int slots;       /* its light slots with irradiance */
+  int light_count; /* the strongest of them, at most CF_SPHERE_MAX_LIGHTS */
+  /* the lights in the camera frame; irradiance × exposure */
+  double direction[3 * CF_SPHERE_MAX_LIGHTS], irradiance[3 * CF_SPHERE_MAX_LIGHTS];
+  double exposure;   /* puts a white Lambertian sphere's peak at CF_SPHERE_KNEE */
+  char absent[1100]; /* why the interactive view is absent ("" when present) */
+} report_view;
+cf_status report_view_scene(const report_data *d, report_view *v, cf_error *err);
+/* DIR/viewer/: clayfit.png (clayfit's rendering), material.mjs (the glsl
+ * export), material.js (it as a classic script), three_viewer.js (a copy of
+ * `bundle`; when it cannot be read, v->absent says why and the page says
+ * so). */
+cf_status report_view_write(const report_data *d, const char *dir, const char *fit_path,
+                            const char *bundle, report_view *v, cf_error *err);
+void report_view_html(FILE *f, const report_data *d, const report_view *v);
+
 /* report.json and index.html. image_files: 3 names per image. */
 cf_status report_write_json(const report_data *d, const char *dir, const char *fit_path,
                             const char *version, char (*image_files)[3][64], cf_error *err);
 cf_status report_write_html(const report_data *d, const char *dir, const char *fit_path,
-                            const char *version, char (*image_files)[3][64], cf_error *err);
+                            const char *version, char (*image_files)[3][64],
+                            const report_view *view, cf_error *err);
 
 #endif /* CLAYFIT_REPORT_INTERNAL_H */

@@ -33,6 +33,8 @@ void cf_sphere_view_default(cf_sphere_view *view) {
   view->edge_samples = 3;
   view->footprint_tolerance = 2e-3;
   view->footprint_max = 8;
+  view->light_count = 0;
+  view->light_direction = view->light_irradiance = NULL;
 }
 
 double cf_sphere_tone(double linear) {
@@ -59,24 +61,54 @@ static cf_status check_view(const cf_sphere_view *v, cf_error *err) {
   if (!(v->footprint_tolerance >= 0.0) || !isfinite(v->footprint_tolerance))
     return cf_error_set(err, CF_EINVAL, "sphere view: footprint_tolerance %g is not >= 0",
                         v->footprint_tolerance);
+  if (v->light_count < 0 || v->light_count > CF_SPHERE_MAX_LIGHTS ||
+      (v->light_count > 0 && (!v->light_direction || !v->light_irradiance)))
+    return cf_error_set(err, CF_EINVAL,
+                        "sphere view: light_count %d is outside 0..%d, or no lights",
+                        v->light_count, CF_SPHERE_MAX_LIGHTS);
+  for (int k = 0; k < 3 * v->light_count; ++k)
+    if (!isfinite(v->light_direction[k]) || !(v->light_irradiance[k] >= 0.0) ||
+        !isfinite(v->light_irradiance[k]))
+      return cf_error_set(err, CF_EINVAL, "sphere view: light %d is not finite or negative", k / 3);
   return CF_OK;
+}
+
+/* The view's lights (its own, or the standard light), directions unit. */
+typedef struct sphere_lights {
+  int count;
+  double direction[CF_SPHERE_MAX_LIGHTS][3], irradiance[CF_SPHERE_MAX_LIGHTS][3];
+} sphere_lights;
+
+static void view_lights(const cf_sphere_view *v, sphere_lights *out) {
+  out->count = v->light_count ? v->light_count : CF_SPHERE_LIGHT_COUNT;
+  for (int k = 0; k < out->count; ++k) {
+    const double *d = v->light_count ? v->light_direction + 3 * k : standard_lights[k].direction;
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int c = 0; c < 3; ++c) {
+      out->direction[k][c] = len > 0.0 ? d[c] / len : 0.0;
+      out->irradiance[k][c] = len > 0.0 ? (v->light_count ? v->light_irradiance[3 * k + c]
+                                                          : standard_lights[k].irradiance)
+                                        : 0.0;
+    }
+  }
 }
 
 /* ---- the render: samples of a row batched through cf_eval_batch ---- */
 
 /* Geometries per evaluator call; a pixel needs at most
- * CF_SPHERE_MAX_SAMPLES² × CF_SPHERE_LIGHT_COUNT = 512. */
+ * CF_SPHERE_MAX_SAMPLES² × CF_SPHERE_MAX_LIGHTS = 8192. */
 enum { BATCH = 8192 };
 
 typedef struct render {
   cf_model_id model;
   const double *params;
   const cf_sphere_view *view;
+  sphere_lights lights;
   double centre, radius_px, lobe_width;
   cf_geometry *geometry; /* BATCH */
   double *f;             /* 3 × BATCH */
   int *pixel;            /* BATCH: the pixel of the row each geometry adds to */
-  double *scale;         /* BATCH: E × the sample's weight */
+  double *scale;         /* 3 × BATCH: E × the sample's weight */
   size_t count;
   double *row; /* 3 × size: the row's radiance */
 } render;
@@ -110,8 +142,8 @@ static int footprint_samples(const render *r, double px, double py) {
   /* the normal turns fastest radially: 1/(R cos θ_o) radians per pixel */
   double delta = 1.0 / (r->radius_px * fmax(n[2], 1e-9));
   int most = 1;
-  for (int k = 0; k < CF_SPHERE_LIGHT_COUNT; ++k) {
-    const double *l = standard_lights[k].direction;
+  for (int k = 0; k < r->lights.count; ++k) {
+    const double *l = r->lights.direction[k];
     if (n[0] * l[0] + n[1] * l[1] + n[2] * l[2] <= 0.0) continue;
     double h[3] = {l[0] + view_dir[0], l[1] + view_dir[1], l[2] + view_dir[2]};
     double len = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
@@ -129,8 +161,9 @@ static cf_status flush(render *r) {
   cf_status s = cf_eval_batch(r->model, r->params, r->count, r->geometry, r->f, NULL);
   if (s != CF_OK) return s;
   for (size_t i = 0; i < r->count; ++i) {
-    double weight = r->scale[i] * r->geometry[i].cos_i;
-    for (int c = 0; c < 3; ++c) r->row[3 * (size_t)r->pixel[i] + c] += r->f[3 * i + c] * weight;
+    double weight = r->geometry[i].cos_i;
+    for (int c = 0; c < 3; ++c)
+      r->row[3 * (size_t)r->pixel[i] + c] += r->f[3 * i + c] * weight * r->scale[3 * i + c];
   }
   r->count = 0;
   return CF_OK;
@@ -144,16 +177,16 @@ static cf_status add_sample(render *r, int x, double px, double py, double w) {
     for (int c = 0; c < 3; ++c) r->row[3 * (size_t)x + c] += w * r->view->background[c];
     return CF_OK;
   }
-  if (r->count + CF_SPHERE_LIGHT_COUNT > BATCH) {
+  if (r->count + (size_t)r->lights.count > BATCH) {
     cf_status s = flush(r);
     if (s != CF_OK) return s;
   }
-  for (int k = 0; k < CF_SPHERE_LIGHT_COUNT; ++k) {
-    cf_geometry g = cf_geometry_from_directions(n, standard_lights[k].direction, view_dir);
+  for (int k = 0; k < r->lights.count; ++k) {
+    cf_geometry g = cf_geometry_from_directions(n, r->lights.direction[k], view_dir);
     if (!cf_geometry_is_lit(&g)) continue;
     r->geometry[r->count] = g;
     r->pixel[r->count] = x;
-    r->scale[r->count] = w * standard_lights[k].irradiance;
+    for (int c = 0; c < 3; ++c) r->scale[3 * r->count + c] = w * r->lights.irradiance[k][c];
     ++r->count;
   }
   return CF_OK;
@@ -218,7 +251,8 @@ cf_status cf_sphere_render(cf_model_id model, const double *params, const cf_sph
   r.geometry = malloc(BATCH * sizeof *r.geometry);
   r.f = malloc(3 * BATCH * sizeof *r.f);
   r.pixel = malloc(BATCH * sizeof *r.pixel);
-  r.scale = malloc(BATCH * sizeof *r.scale);
+  r.scale = malloc(3 * BATCH * sizeof *r.scale);
+  view_lights(view, &r.lights);
   r.row = malloc(3 * (size_t)view->size * sizeof *r.row);
   if (!r.geometry || !r.f || !r.pixel || !r.scale || !r.row)
     s = cf_error_set(err, CF_ENOMEM, "sphere render: out of memory");

@@ -37,7 +37,9 @@ IMAGE_NAMES = ['i0\n<script>alert(0)</script>.png', 'i1 "dq" \'sq\' &amp; <b>.pn
                'i2 --> <!-- \\ """.png', 'i3 onerror=alert(3) x=".png']
 PAGE_TAGS = {"html", "head", "meta", "title", "style", "body", "h1", "h2", "p", "code", "b",
              "table", "tr", "th", "td", "div", "img", "br", "svg", "defs", "lineargradient",
-             "stop", "rect", "text", "script"}
+             "stop", "rect", "text", "script", "canvas", "a"}
+# the material's view (docs/report.md): its two scripts, by these names only
+VIEWER_SCRIPTS = ["viewer/material.js", "viewer/three_viewer.js"]
 COLMAP_MODELS = {"SIMPLE_PINHOLE": 0, "PINHOLE": 1, "SIMPLE_RADIAL": 2, "RADIAL": 3, "OPENCV": 4}
 
 
@@ -104,6 +106,7 @@ class Page(html.parser.HTMLParser):
         self.tags, self.alts, self.text, self.title = [], [], [], ""
         self.in_title = False
         self.bad_attributes = []
+        self.script_srcs = []
 
     def handle_starttag(self, tag, attrs):
         self.tags.append(tag)
@@ -113,6 +116,8 @@ class Page(html.parser.HTMLParser):
                 self.bad_attributes.append((tag, key, value))
             if tag == "img" and key == "alt":
                 self.alts.append(value)
+            if tag == "script" and key == "src":
+                self.script_srcs.append(value)
 
     def handle_endtag(self, tag):
         self.in_title = False
@@ -136,8 +141,18 @@ def check_page(report, fit_path, capture_path):
     page.feed(raw)
     page.close()
     text = "".join(page.text)
-    if page.tags.count("script") != 1:
-        failures.append(f"{page.tags.count('script')} <script> elements, expected 1")
+    # the page's own inline script, and the material view's two (or none
+    # when clayfit was built without the three.js bundle)
+    viewer = VIEWER_SCRIPTS if page.script_srcs else []
+    if page.tags.count("script") != 1 + len(viewer) or page.script_srcs not in ([], viewer):
+        failures.append(f"{page.tags.count('script')} <script> elements "
+                        f"({page.script_srcs}), expected the page's and {VIEWER_SCRIPTS}")
+    # the glsl export as a classic script still parses with the hostile
+    # names in its header's comments
+    node = shutil.which("node")
+    material = os.path.join(report, "viewer", "material.js")
+    if node and subprocess.run([node, "--check", material], capture_output=True).returncode:
+        failures.append("node --check refuses viewer/material.js")
     unknown = sorted(set(page.tags) - PAGE_TAGS)
     if unknown:
         failures.append(f"tags that are not the page's: {unknown}")

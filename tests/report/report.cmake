@@ -16,6 +16,21 @@ add_test(NAME report_synth_browser
                  ${FIT_SMALL}/report ${FIT_SMALL}/report_screenshot.png)
 set_tests_properties(report_synth_browser PROPERTIES LABELS "report" FIXTURES_REQUIRED report_synth
                      SKIP_RETURN_CODE 77 TIMEOUT 400)
+# Issue 19 item 4: the material's interactive view (three.js, the exact glsl
+# material) draws the sphere in WebGL (SwiftShader) and matches clayfit's
+# rendering; two broken materials are caught (skips without Chromium or the
+# three.js bundle). Without the bundle beside clayfit, the page says so.
+add_test(NAME report_synth_viewer
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_report_viewer.py
+                 ${CLAYFIT} ${FIT_SMALL}/report ${CMAKE_CURRENT_BINARY_DIR}/report_viewer)
+set_tests_properties(report_synth_viewer PROPERTIES LABELS "report" FIXTURES_REQUIRED report_synth
+                     SKIP_RETURN_CODE 77 TIMEOUT 400)
+add_test(NAME report_viewer_absent
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/report/check_report_viewer.py
+                 --absent ${CLAYFIT} ${FIT_SMALL}/auto/fit.json
+                 ${CMAKE_CURRENT_BINARY_DIR}/report_viewer_absent)
+set_tests_properties(report_viewer_absent PROPERTIES LABELS "cli;report"
+                     FIXTURES_REQUIRED "fit_small;fit_small_auto")
 
 # errors: exit 2 with the reason
 clayfit_cli_test(error_report_no_fit --exit 2 --stderr "no-such-fit.json"

@@ -73,7 +73,7 @@ static int report_child(const char *fit_path, const char *dir, int kill_at, int 
     cf_status s = cf_fit_file_read(fit_path, &fit, &err);
     if (s == CF_OK) s = cf_capture_load(capture_path, NULL, &capture, &err);
     if (s == CF_OK) {
-      cf_report_options o = {fit_path, "test", on_progress, &h, NULL, NULL};
+      cf_report_options o = {fit_path, "test", on_progress, &h, NULL, NULL, NULL};
       s = cf_report_write(capture, &fit, dir, &o, &err);
     }
     if (s != CF_OK && expect_error && strstr(err.message, expect_error)) _exit(3);

@@ -12,6 +12,11 @@
  *   - an M2, M3 and M4 render (glossy ones too: the highlight's footprint
  *     integration) is finite and non-negative;
  *   - a brighter albedo gives a brighter sphere (linear and PNG);
+ *   - the view's own lights (the report's material view): the standard
+ *     light given as its own lights renders the same image to the bit; a
+ *     coloured light from the upper right, irradiance (2, 0.5, 0), renders
+ *     each channel to its analytic Lambert value (1e-6); 33 lights, a
+ *     negative irradiance or no directions are refused;
  *   - the PNG exists, 256 × 256, holds the tone-mapped sRGB values, and no
  *     temporary is left; a write into a missing folder fails (CF_EIO) and
  *     leaves nothing; bad views and parameters are refused.
@@ -327,6 +332,63 @@ static void test_png(const char *work) {
         "tone curve");
 }
 
+static void test_own_lights(void) {
+  const double albedo[3] = {0.5, 0.5, 0.5};
+  cf_sphere_view view;
+  cf_sphere_view_default(&view);
+  view.size = 64;
+  cf_image standard = {0}, own = {0}, coloured = {0};
+  cf_error err = {0};
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &standard, &err) == CF_OK, "%s",
+        err.message);
+  double direction[6], irradiance[6];
+  for (int k = 0; k < 2; ++k)
+    for (int c = 0; c < 3; ++c) {
+      direction[3 * k + c] = cf_sphere_lights()[k].direction[c];
+      irradiance[3 * k + c] = cf_sphere_lights()[k].irradiance;
+    }
+  view.light_count = 2;
+  view.light_direction = direction;
+  view.light_irradiance = irradiance;
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &own, &err) == CF_OK, "%s", err.message);
+  CHECK(standard.pixels && own.pixels &&
+            memcmp(standard.pixels, own.pixels, 3 * 64 * 64 * sizeof(float)) == 0,
+        "the standard light given as the view's lights renders another image");
+  const double l[3] = {0.6, 0.0, 0.8}, e[3] = {2.0, 0.5, 0.0};
+  view.light_count = 1;
+  view.light_direction = l;
+  view.light_irradiance = e;
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &coloured, &err) == CF_OK, "%s",
+        err.message);
+  double worst = 0.0;
+  for (int y = 0; coloured.pixels && y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      if (pixel_class(64, view.radius, x, y) != 1) continue;
+      double centre = 32.0, r = view.radius * centre;
+      double u = (x + 0.5 - centre) / r, w = (centre - (y + 0.5)) / r;
+      double cos_i = fmax(0.0, 0.6 * u + 0.8 * sqrt(1.0 - u * u - w * w));
+      for (int c = 0; c < 3; ++c)
+        worst = fmax(worst, fabs(pixel(&coloured, x, y, c) - 0.5 / pi * e[c] * cos_i));
+    }
+  CHECK(coloured.pixels && worst < 1e-6, "a coloured light: %g off the analytic Lambert", worst);
+  cf_image_free(&standard);
+  cf_image_free(&own);
+  cf_image_free(&coloured);
+  cf_image none = {0};
+  view.light_count = CF_SPHERE_MAX_LIGHTS + 1;
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &none, &err) == CF_EINVAL,
+        "33 lights accepted");
+  const double negative[3] = {1.0, -1.0, 1.0};
+  view.light_count = 1;
+  view.light_irradiance = negative;
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &none, &err) == CF_EINVAL,
+        "a negative irradiance accepted");
+  view.light_irradiance = e;
+  view.light_direction = NULL;
+  CHECK(cf_sphere_render(CF_MODEL_LAMBERT, albedo, &view, &none, &err) == CF_EINVAL,
+        "lights without directions accepted");
+}
+
 static void test_refusals(void) {
   cf_sphere_view view;
   cf_sphere_view_default(&view);
@@ -403,6 +465,7 @@ int main(int argc, char **argv) {
   test_models();
   test_albedo_order(argv[1]);
   test_png(argv[1]);
+  test_own_lights();
   test_refusals();
   timing(argv[1]);
   return check_finish("test_thumbnail");
