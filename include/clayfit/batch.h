@@ -31,12 +31,12 @@ enum {
 
 typedef struct cf_batch_entry {
   char name[CF_BATCH_NAME_MAX + 1];
-  char *capture;      /* the capture file: as given, joined to the manifest's folder */
-  const char *model;  /* "auto" or a model's code or name (checked) */
+  char *capture;     /* the capture file: as given, joined to the manifest's folder */
+  const char *model; /* "auto" or a model's code or name (checked) */
   int hold_count;
   cf_fit_hold hold[CF_BATCH_MAX_HOLDS]; /* names point into the manifest's document */
-  size_t budget;      /* observations; 0: all */
-  int budget_given;   /* 0: clayfit fit's default */
+  size_t budget;                        /* observations; 0: all */
+  int budget_given;                     /* 0: clayfit fit's default */
   int fit_exposures;
   const struct json_t *options; /* the entry's "options" object, or NULL */
   const struct json_t *tags;    /* its "tags" (an object of strings), or NULL */
@@ -119,7 +119,9 @@ void cf_batch_failed_reason(const char *library, const char *name, char *out, si
 /* ---- one task ---- */
 
 typedef struct cf_batch_task_options {
-  int threads; /* solver threads */
+  int threads;               /* solver threads */
+  const char *viewer_bundle; /* the report's three.js bundle
+                                (cf_report_options.viewer_bundle); NULL: none */
 } cf_batch_task_options;
 
 /* Run entry `index` in this process: load the capture, fit, write fit.json,
@@ -151,8 +153,8 @@ typedef enum cf_batch_outcome {
 } cf_batch_outcome;
 
 /* Called as each task ends: finished indexes todo[]. */
-typedef void (*cf_batch_progress_fn)(void *user, const cf_batch_progress *progress,
-                                     size_t finished, cf_batch_outcome outcome);
+typedef void (*cf_batch_progress_fn)(void *user, const cf_batch_progress *progress, size_t finished,
+                                     cf_batch_outcome outcome);
 
 typedef struct cf_batch_local_options {
   const char *exe;      /* the clayfit executable (/proc/self/exe) */
@@ -179,7 +181,7 @@ typedef struct cf_batch_slurm_options {
   const char *manifest; /* absolute */
   const char *library;  /* absolute: the shared file system */
   const cf_batch_manifest *entries;
-  int threads;          /* solver threads per task; 0: $SLURM_CPUS_PER_TASK */
+  int threads; /* solver threads per task; 0: $SLURM_CPUS_PER_TASK */
   int cpus_per_task, max_running;
   const char *partition, *time, *mem; /* NULL: the cluster's default */
   char *const *sbatch_args;           /* passed verbatim, each one argument */
@@ -191,10 +193,10 @@ typedef struct cf_batch_slurm_options {
 
 /* The job of one run: its script and the sbatch command that submits it. */
 typedef struct cf_batch_slurm_job {
-  char script[4096];      /* LIBRARY/.slurm/job-<UTC time>.sh */
-  char **argv;            /* sbatch's, NULL-terminated */
+  char script[4096]; /* LIBRARY/.slurm/job-<UTC time>.sh */
+  char **argv;       /* sbatch's, NULL-terminated */
   int argc;
-  char id[64];            /* the job id once submitted */
+  char id[64];                /* the job id once submitted */
   unsigned long long *before; /* per task: LIBRARY/<name>'s inode before, 0 if none */
 } cf_batch_slurm_job;
 

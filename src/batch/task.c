@@ -26,6 +26,7 @@
 typedef struct task {
   const cf_batch_entry *entry;
   const char *library;
+  const char *viewer_bundle; /* the report's three.js bundle, or NULL */
   char tmp[4096];
   char key[CF_BATCH_KEY_SIZE];
   char model[16];
@@ -144,7 +145,8 @@ static cf_status report(task *t, const cf_capture *capture, const cf_fit_file *f
   char dir[4096], label[4096];
   fit_label(t, label, sizeof label);
   cf_status s = in_tmp(t, "report", dir, sizeof dir, err);
-  cf_report_options options = {label, CLAYFIT_VERSION, NULL, NULL, t->entry->capture, "", NULL};
+  cf_report_options options = {label, CLAYFIT_VERSION, NULL, NULL, t->entry->capture,
+                               "",    t->viewer_bundle};
   if (s == CF_OK) s = cf_report_write(capture, file, dir, &options, err);
   return s;
 }
@@ -236,7 +238,10 @@ cf_status cf_batch_task_run(const cf_batch_manifest *m, size_t index, const char
                             const cf_batch_task_options *options, cf_error *err) {
   if (index >= m->count)
     return cf_error_set(err, CF_ERANGE, "task %zu: the manifest has %zu captures", index, m->count);
-  task t = {.entry = &m->entries[index], .library = library, .log = json_array()};
+  task t = {.entry = &m->entries[index],
+            .library = library,
+            .viewer_bundle = options->viewer_bundle,
+            .log = json_array()};
   if (!t.log) return cf_error_set(err, CF_ENOMEM, "out of memory");
   t.start_wall = cf_now_seconds();
   double cpu0 = cpu_seconds();

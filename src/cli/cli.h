@@ -26,6 +26,12 @@ int cmd_export(int argc, char **argv, cli_context *ctx);
 int cmd_batch(int argc, char **argv, cli_context *ctx);
 int cmd_library(int argc, char **argv, cli_context *ctx); /* clayfit library compare */
 int cmd_lights(int argc, char **argv, cli_context *ctx);  /* clayfit lights (chrome ball) */
+
+/* The path of the report's three.js bundle, built beside the clayfit binary
+ * (src/report/viewer/viewer.cmake); "" when the binary's path is unknown
+ * (the report then says why its interactive view is absent). For
+ * cf_report_options.viewer_bundle (clayfit report, clayfit batch's tasks). */
+void cli_viewer_bundle(char *path, size_t size);
 /* clayfit lights --probe (cmd_lights_probe.c), called by cmd_lights when
  * --probe is among its arguments; argv[0] is "lights". */
 int cli_lights_probe(int argc, char **argv);

@@ -172,7 +172,9 @@ static int parse_command(int argc, char **argv, batch_command *cmd) {
 /* --task I: one entry in this process. */
 static int run_task(const batch_command *cmd, const cf_batch_manifest *m, const cli_context *ctx) {
   cf_error err = {0};
-  cf_batch_task_options options = {(int)cmd->threads};
+  char bundle[4096];
+  cli_viewer_bundle(bundle, sizeof bundle);
+  cf_batch_task_options options = {(int)cmd->threads, bundle};
   if (cmd->task >= (long)m->count) {
     fprintf(stderr, "clayfit batch: --task %ld: the manifest has %zu captures\n", cmd->task,
             m->count);

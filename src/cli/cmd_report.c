@@ -72,10 +72,7 @@ static cf_status load_capture(const cf_fit_file *fit, const char *fit_path, cons
   return s;
 }
 
-/* The report's three.js bundle, built beside the clayfit binary
- * (src/report/viewer/viewer.cmake); "" when the binary's path is unknown
- * (the report then says why its interactive view is absent). */
-static void viewer_bundle(char *path, size_t size) {
+void cli_viewer_bundle(char *path, size_t size) {
   ssize_t n = readlink("/proc/self/exe", path, size - 1);
   char *slash = NULL;
   for (ssize_t i = 0; i < n; ++i)
@@ -149,7 +146,7 @@ int cmd_report(int argc, char **argv, cli_context *ctx) {
                                       check,
                                       NULL};
   char bundle[4096];
-  viewer_bundle(bundle, sizeof bundle);
+  cli_viewer_bundle(bundle, sizeof bundle);
   report_options.viewer_bundle = bundle;
   s = cf_report_write(capture, &fit, out_dir, &report_options, &err);
   cf_capture_free(capture);

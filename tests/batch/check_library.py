@@ -163,6 +163,13 @@ for name in fitted:
     check(set(timing) == {"load", "fit", "presets", "report", "thumbnail"}
           and all(v >= 0 for v in timing.values()), f"{name}: entry.json's timing {timing}")
 check(records["broken"]["thumbnail"] is None, "broken: no thumbnail")
+# each entry's report has the interactive view when the three.js bundle was
+# built beside clayfit (the tasks pass it on as `clayfit report` does)
+if os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(CLAYFIT)),
+                               "clayfit-report-viewer.js")):
+    for name in fitted:
+        viewer = os.path.join(LIBRARY, name, "report", "viewer", "three_viewer.js")
+        check(os.path.isfile(viewer), f"{name}: the report has its three.js view ({viewer})")
 
 # ---- index.html: the same records ----
 page = Page()
