@@ -16,7 +16,9 @@
  * An interface's F0 below 0.01 (f0, base_f0) is checked apart
  * (f0_small_difference): the exact Fresnel is analytic in s = √F0, not in
  * F0 (F = a F0 + b F0^{3/2} + ... at 0), and varies on the scale of
- * F0 itself, so the fixed step 1e-6 of (34) errs by 1e-5 there. */
+ * F0 itself, so the fixed step 1e-6 of (34) errs by 1e-5 there.
+ *
+ * usage: test_gradient [MODEL...] (codes or names; default every model) */
 #include <math.h>
 #include <string.h>
 
@@ -173,16 +175,35 @@ static void report(const gradient_state *s) {
       s->worst.g_fd, s->worst.f, s->f0_zero, s->f0_zero_skipped);
 }
 
-int main(void) {
+/* The models named on the command line (codes or names), else all. */
+static int models_from_args(int argc, char **argv, cf_model_id *models) {
+  if (argc < 2) {
+    for (int m = 0; m < CF_MODEL_COUNT; ++m) models[m] = (cf_model_id)m;
+    return CF_MODEL_COUNT;
+  }
+  int count = 0;
+  for (int i = 1; i < argc && count < CF_MODEL_COUNT; ++i) {
+    cf_error err = {0};
+    if (cf_model_find(argv[i], &models[count], &err) == CF_OK)
+      ++count;
+    else
+      CHECK(0, "%s", err.message);
+  }
+  return count;
+}
+
+int main(int argc, char **argv) {
+  cf_model_id models[CF_MODEL_COUNT];
+  int model_count = models_from_args(argc, argv, models);
   printf(
       "tolerance: |g - g_fd| <= %.0e (|f| + %.0e) + eps_r max(|g|, |g_fd|, q), "
       "eps_r = %.0e central, %.0e one-sided\n",
       eps_abs, eps_abs_floor, eps_rel_central, eps_rel_one_sided);
   hard_count = hard_geometries(hard_n, hard_l, hard_v, MAX_GEOMETRIES);
-  for (int m = 0; m < CF_MODEL_COUNT; ++m) {
-    cf_model_id model = (cf_model_id)m;
+  for (int j = 0; j < model_count; ++j) {
+    cf_model_id model = models[j];
     gradient_state random_state = {.model = model, .set = "random"};
-    cf_rng rng = cf_rng_seed(4242 + (uint64_t)m);
+    cf_rng rng = cf_rng_seed(4242 + (uint64_t)model);
     for (int i = 0; i < RANDOM_CASES; ++i) {
       double params[CF_MAX_DIM], n[3], l[3], v[3];
       random_params(&rng, model, 0.1, params);
