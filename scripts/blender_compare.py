@@ -13,17 +13,21 @@ pixels and channels, with c clayfit's value and b Blender's. Also printed: the
 ratio of the sums (a global gain), and the relative RMSE after the best gain
 (what is left is the shape). The difference image maps (b - c) to grey 0.5 +/-
 0.5 at +/- 25 % of clayfit's mean value over the pixels (each channel
-apart), black outside the compared pixels.
+apart), black outside the compared pixels. The figures and the image are
+scripts/scene_compare.py's, shared with threejs_fidelity.py.
 """
 import argparse
 import array
 import json
+import os
 import sys
 
 import bpy
 
 # Plain Python, no numpy: Blender started from another Python's environment
 # (a pyenv on PATH) runs that Python's site-packages, which may have none.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scene_compare as sc  # noqa: E402
 
 
 def parse_args():
@@ -51,25 +55,11 @@ def load(path):
     return w, h, pixels
 
 
-def erode(mask, w, h, steps):
-    for _ in range(steps):
-        out = [False] * (w * h)
-        for y in range(1, h - 1):
-            row = y * w
-            for x in range(1, w - 1):
-                i = row + x
-                out[i] = mask[i] and mask[i - 1] and mask[i + 1] and mask[i - w] and mask[i + w]
-        mask = out
-    return mask
-
-
-def write_diff(path, w, h, c, b, inside, mean):
-    scale = 0.25 * mean
+def write_diff(path, w, h, rgb):
+    """sc.diff_values' image as a PNG through Blender (its rows bottom first)."""
     out = array.array("f", [0.0, 0.0, 0.0, 1.0] * (w * h))
-    for i in inside:
-        for k in range(3):
-            d = 0.5 + 0.5 * (b[4 * i + k] - c[4 * i + k]) / scale
-            out[4 * i + k] = min(1.0, max(0.0, d))
+    for i in range(w * h):
+        out[4 * i:4 * i + 3] = array.array("f", rgb[3 * i:3 * i + 3])
     image = bpy.data.images.new("diff", w, h, alpha=False, float_buffer=False)
     image.colorspace_settings.name = "Non-Color"
     image.pixels.foreach_set(out)
@@ -84,40 +74,10 @@ def main():
     if (w, h) != (wb, hb) or (w, h) != (wm, hm):
         raise SystemExit(f"blender_compare: sizes differ: clayfit {w}x{h}, Blender {wb}x{hb}, "
                          f"mask {wm}x{hm}")
-    mask = erode([m[4 * i] >= 1.0 - 1e-6 for i in range(w * h)], w, h, a.margin)
-    inside = [i for i in range(w * h) if mask[i]]
-    if not inside:
-        raise SystemExit("blender_compare: the mask leaves no pixel")
-    e2 = y2 = bc = bb2 = sum_b = sum_c = peak = max_d = 0.0
-    e2k, y2k = [0.0] * 3, [0.0] * 3
-    for i in inside:
-        for k in range(3):
-            cv, bv = float(c[4 * i + k]), float(b[4 * i + k])
-            if not (abs(cv) < float("inf") and abs(bv) < float("inf")):
-                raise SystemExit(f"blender_compare: pixel {i % w}, {i // w} is not finite")
-            d = bv - cv
-            e2k[k] += d * d
-            y2k[k] += cv * cv
-            bc += bv * cv
-            bb2 += bv * bv
-            sum_b += bv
-            sum_c += cv
-            peak = max(peak, cv)
-            max_d = max(max_d, abs(d))
-    e2, y2 = sum(e2k), sum(y2k)
-    gain = bc / bb2 if bb2 > 0.0 else 0.0
-    # sum (g b - c)^2 = g^2 sum b^2 - 2 g sum bc + sum c^2
-    after = max(0.0, gain * gain * bb2 - 2.0 * gain * bc + y2)
-    result = {
-        "pixels": len(inside),
-        "relative_rmse": (e2 / y2) ** 0.5,
-        "sum_ratio": sum_b / sum_c,
-        "relative_rmse_after_gain": (after / y2) ** 0.5,
-        "relative_rmse_per_channel": [(e2k[k] / y2k[k]) ** 0.5 for k in range(3)],
-        "max_abs_diff_over_peak": max_d / peak,
-    }
+    result, inside, mean = sc.compare(c, b, [m[4 * i] for i in range(w * h)], w, h, a.margin,
+                                      4, "blender_compare")
     if a.diff:
-        write_diff(a.diff, w, h, c, b, inside, sum_c / (3 * len(inside)))
+        write_diff(a.diff, w, h, sc.diff_values(c, b, inside, w, h, mean, 4))
     text = json.dumps(result)
     print("blender_compare:", text)
     if a.json:

@@ -20,46 +20,27 @@ import argparse
 import json
 import os
 import shutil
-import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import scene_compare as sc  # noqa: E402
+
+PROG = "blender_fidelity"
 
 
 def run(command, what):
-    result = subprocess.run(command, capture_output=True, text=True, timeout=600)
-    if result.returncode != 0:
-        sys.stderr.write(result.stdout[-3000:] + result.stderr[-3000:])
-        raise SystemExit(f"blender_fidelity: {what} failed (exit {result.returncode})")
-    return result.stdout
-
-
-def synth_params(fit):
-    """--param name=value for every parameter of the fit."""
-    out = []
-    for name, p in fit["params"].items():
-        v = p["value"]
-        text = ",".join(repr(float(x)) for x in v) if isinstance(v, list) else repr(float(v))
-        out += ["--param", f"{name}={text}"]
-    return out
+    return sc.run(command, what, PROG)
 
 
 def one(a, fit_path):
-    name = os.path.basename(os.path.dirname(os.path.abspath(fit_path)))
-    work = os.path.join(a.workdir, name)
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    with open(fit_path, encoding="utf-8") as f:
-        fit = json.load(f)
+    name, work, fit = sc.fit_folder(a.workdir, fit_path)
     preset = os.path.join(work, "preset.py")
     run([a.clayfit, "--quiet", "export", fit_path, "--format", "blender", "-o", preset], "export")
     synth = os.path.join(work, "synth")
     t0 = time.monotonic()
-    run([a.clayfit, "--quiet", "synth", "-o", synth, "--model", fit["model"]["code"],
-         *synth_params(fit), "--images", "1", "--size", a.size, "--format", "exr",
-         "--no-noise", "--masks", "--supersample", str(a.supersample),
-         "--flash-offset", a.flash_offset], "clayfit synth")
+    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG)
     t1 = time.monotonic()
     render = os.path.join(work, "blender.exr")
     sets = [x for s in a.set for x in ("--set", s)]
@@ -99,13 +80,7 @@ def main():
     failed = False
     for fit in a.fits:
         r = one(a, fit)
-        print(json.dumps(r))
-        print(f"| {r['fit']} | {100 * r['relative_rmse']:.2f} % | {r['sum_ratio']:.4f} | "
-              f"{100 * r['relative_rmse_after_gain']:.2f} % | {r['pixels']} |")
-        if a.max_rmse is not None and not r["relative_rmse"] <= a.max_rmse:
-            print(f"FAIL: {r['fit']}: relative RMSE {r['relative_rmse']:.4g} is above "
-                  f"{a.max_rmse:.4g}")
-            failed = True
+        failed = sc.report(r, a.max_rmse) or failed
     return 1 if failed else 0
 
 

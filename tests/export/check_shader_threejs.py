@@ -34,8 +34,11 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 from make_fits import VALUES  # noqa: E402  (the fixtures' parameters)
+import scene_compare as sc  # noqa: E402  (camera, flash, the Chromium page)
 
 WIDTH, HEIGHT = 160, 120
 # (name, model, parameters): the export fixtures' (make_fits.py), and M2T
@@ -75,30 +78,6 @@ def synth(clayfit, model, values, folder):
                     "--masks", "--model", model] + params, check=True, capture_output=True)
 
 
-def colmap_camera(folder):
-    cam = open(os.path.join(folder, "sparse/0/cameras.txt")).read().split("\n")
-    cam = [line for line in cam if line and not line.startswith("#")][0].split()
-    assert cam[1] == "PINHOLE", cam
-    fx, fy, cx, cy = map(float, cam[4:8])
-    img = [line for line in open(os.path.join(folder, "sparse/0/images.txt")).read().split("\n")
-           if line and not line.startswith("#")][0].split()
-    qw, qx, qy, qz, tx, ty, tz = map(float, img[1:8])
-    r = [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-         [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-         [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
-    t = [tx, ty, tz]
-    centre = [-sum(r[k][i] * t[k] for k in range(3)) for i in range(3)]
-    return {"fx": fx, "fy": fy, "cx": cx, "cy": cy, "r": r, "centre": centre}
-
-
-def flash(folder, camera):
-    truth = json.load(open(os.path.join(folder, "truth.json")))
-    offset, r = truth["flash"]["offset"], camera["r"]
-    position = [camera["centre"][i] + sum(r[k][i] * offset[k] for k in range(3))
-                for i in range(3)]
-    return position, truth["flash"]["intensity"]
-
-
 PAGE_SCRIPT = r"""
 import * as THREE from 'three';
 %(imports)s
@@ -109,29 +88,10 @@ canvas.width = W; canvas.height = H;
 document.body.appendChild(canvas);
 const out = document.getElementById('out');
 try {
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
-  const gl = renderer.getContext();
-  if (!(gl instanceof WebGL2RenderingContext)) throw new Error('no WebGL2');
-  if (!gl.getExtension('EXT_color_buffer_float')) throw new Error('no EXT_color_buffer_float');
-  renderer.setPixelRatio(1);
+  const renderer = floatRenderer(THREE, canvas);
   renderer.setSize(W, H, false);
-  const target = new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType,
-    format: THREE.RGBAFormat, minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
-    depthBuffer: true });
-  // the COLMAP camera: x right, y down, z forward -> three.js' y up, z back
-  const cam = new THREE.PerspectiveCamera(30, W / H, 0.1, 100);
-  const r = scene.camera.r, c = scene.camera.centre;
-  const basis = new THREE.Matrix4().makeBasis(new THREE.Vector3(r[0][0], r[0][1], r[0][2]),
-    new THREE.Vector3(-r[1][0], -r[1][1], -r[1][2]), new THREE.Vector3(-r[2][0], -r[2][1], -r[2][2]));
-  cam.quaternion.setFromRotationMatrix(basis);
-  cam.position.set(c[0], c[1], c[2]);
-  cam.updateMatrixWorld(true);
-  const n = 0.1, f = 100, k = scene.camera;
-  cam.projectionMatrix.set(2 * k.fx / W, 0, 1 - 2 * k.cx / W, 0,
-                           0, 2 * k.fy / H, 2 * k.cy / H - 1, 0,
-                           0, 0, -(f + n) / (f - n), -2 * f * n / (f - n),
-                           0, 0, -1, 0);
-  cam.projectionMatrixInverse.copy(cam.projectionMatrix).invert();
+  const target = floatTarget(THREE, W, H);
+  const cam = colmapCamera(THREE, scene.camera, W, H, 1);
   // any mesh covering the unit sphere: the shader intersects the exact sphere
   const geometry = new THREE.SphereGeometry(1.02, 96, 48);
   const results = {};
@@ -141,17 +101,8 @@ try {
       sphere: { center: [0, 0, 0], radius: 1 } });
     const world = new THREE.Scene();
     world.add(new THREE.Mesh(geometry, material));
-    renderer.setRenderTarget(target);
-    renderer.setClearColor(0x000000, 0);
-    renderer.clear();
-    renderer.render(world, cam);
-    const pixels = new Float32Array(W * H * 4);
-    renderer.readRenderTargetPixels(target, 0, 0, W, H, pixels);
-    const bytes = new Uint8Array(pixels.buffer);
-    let text = '';
-    for (let i = 0; i < bytes.length; i += 8192)
-      text += String.fromCharCode.apply(null, bytes.subarray(i, i + 8192));
-    results[name] = btoa(text);
+    const pixels = renderFloat(THREE, renderer, target, world, cam, W, H);
+    results[name] = base64Floats(pixels);
   }
   out.textContent = 'RESULT ' + JSON.stringify(results) + ' END';
 } catch (e) {
@@ -165,31 +116,9 @@ def build_page(work, node_modules, modules, scene):
                         for i, (_, _, p) in enumerate(modules))
     imports += "\nconst materials = {" + ", ".join(
         f"{json.dumps(name)}: m{i}" for i, (name, _, _) in enumerate(modules)) + "};"
-    entry = os.path.join(work, "entry.js")
-    with open(entry, "w") as f:
-        f.write(PAGE_SCRIPT % {"imports": imports, "scene": json.dumps(scene)})
-    env = dict(os.environ, NODE_PATH=node_modules)
-    esbuild = os.path.join(node_modules, ".bin", "esbuild")
-    subprocess.run([esbuild, entry, "--bundle", "--format=iife", "--log-level=warning",
-                    "--outfile=" + os.path.join(work, "bundle.js")], check=True, env=env)
-    page = os.path.join(work, "index.html")
-    with open(page, "w") as f:
-        f.write('<!doctype html><html><body><pre id="out">PENDING</pre>'
-                '<script src="bundle.js"></script></body></html>')
-    return page
-
-
-def run_chromium(browser, page):
-    cmd = [browser, "--headless", "--no-sandbox", "--use-angle=swiftshader",
-           "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--hide-scrollbars",
-           "--virtual-time-budget=30000", "--dump-dom", "file://" + page]
-    dom = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
-    m = re.search(r"(RESULT|ERROR) (.*?) END", dom.stdout, re.S)
-    if not m:
-        raise RuntimeError("the page did not finish: " + dom.stderr[-2000:])
-    if m.group(1) == "ERROR":
-        raise RuntimeError("the page failed: " + m.group(2))
-    return json.loads(m.group(2))
+    return sc.build_page(work, node_modules,
+                         PAGE_SCRIPT % {"imports": imports, "scene": json.dumps(scene)},
+                         "check_shader_threejs")
 
 
 def compare(reference, mask, data):
@@ -214,16 +143,9 @@ def compare(reference, mask, data):
 
 def main():
     clayfit, node_modules, fits, work = sys.argv[1:5]
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    if not browser:
-        print("SKIP: no Chromium (apt-get install chromium)")
-        return 77
-    for need in ("three/package.json", ".bin/esbuild"):
-        if not os.path.exists(os.path.join(node_modules, need)):
-            print(f"SKIP: no {need} in {node_modules} (scripts/install-deps.sh installs it)")
-            return 77
-    if not shutil.which("oiiotool"):
-        print("SKIP: no oiiotool")
+    browser, skip = sc.chromium_skip(node_modules)
+    if skip:
+        print(skip)
         return 77
     start = time.time()
     shutil.rmtree(work, ignore_errors=True)
@@ -234,8 +156,8 @@ def main():
         synth(clayfit, model, values, folder)
         references[name] = (read_exr(os.path.join(folder, "images/000.exr"), 3),
                             read_exr(os.path.join(folder, "masks/000.exr"), 1))
-        camera = colmap_camera(folder)
-        light, intensity = flash(folder, camera)
+        camera = sc.colmap_camera(folder)
+        light, intensity = sc.flash(folder, camera)
         this = {"width": WIDTH, "height": HEIGHT, "camera": camera, "light": light,
                 "intensity": intensity}
         assert scene is None or scene == this, "synth's scene differs between models"
@@ -260,7 +182,7 @@ def main():
             f.write(text.replace(old, new))
         modules.append((name, model, path))
     page = build_page(work, node_modules, modules, scene)
-    results = run_chromium(browser, page)
+    results = sc.run_chromium(browser, page, 30000, 180, "check_shader_threejs")
     failures = []
     for name, reference, _ in modules:  # a wrong variant is compared with its model's
         error, count, missed = compare(*references[reference], results[name])

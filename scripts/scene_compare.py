@@ -1,0 +1,296 @@
+"""What the renderer comparisons share (docs/fidelity.md, docs/shaders.md):
+the scene of a `clayfit synth` capture (camera 0 of sparse/0, the flash of
+truth.json), the synth of a fit, the comparison of two renderings inside the
+sphere and its difference image, and the headless Chromium + esbuild harness
+of the three.js pages.
+
+Plain Python 3, no numpy: blender_compare.py imports it in Blender's Python
+(whose site-packages may have none); the others from system python3. Each
+caller puts this folder on sys.path.
+"""
+import json
+import math
+import os
+import re
+import shutil
+import struct
+import subprocess
+import sys
+import zlib
+
+
+def run(command, what, prog, **kw):
+    """A command's stdout; its output's tail and `prog: what failed` on failure."""
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600, **kw)
+    if result.returncode != 0:
+        sys.stderr.write(result.stdout[-3000:] + result.stderr[-3000:])
+        raise SystemExit(f"{prog}: {what} failed (exit {result.returncode})")
+    return result.stdout
+
+
+def synth_params(fit):
+    """--param name=value for every parameter of a fit.json's params."""
+    out = []
+    for name, p in fit["params"].items():
+        v = p["value"]
+        text = ",".join(repr(float(x)) for x in v) if isinstance(v, list) else repr(float(v))
+        out += ["--param", f"{name}={text}"]
+    return out
+
+
+def fit_folder(workdir, fit_path):
+    """A fit's name (its folder's), its fresh WORKDIR/NAME and its fit.json."""
+    name = os.path.basename(os.path.dirname(os.path.abspath(fit_path)))
+    work = os.path.join(workdir, name)
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    with open(fit_path, encoding="utf-8") as f:
+        return name, work, json.load(f)
+
+
+def synth_fit(clayfit, fit, folder, size, supersample, flash_offset, prog):
+    """The fidelity scene: one noiseless float image of the fit's model and
+    values with its mask (camera 0: distance 5, 20 degrees up)."""
+    run([clayfit, "--quiet", "synth", "-o", folder, "--model", fit["model"]["code"],
+         *synth_params(fit), "--images", "1", "--size", size, "--format", "exr",
+         "--no-noise", "--masks", "--supersample", str(supersample),
+         "--flash-offset", flash_offset], "clayfit synth", prog)
+
+
+def _records(path):
+    return [line for line in open(path).read().split("\n") if line and not line.startswith("#")]
+
+
+def colmap_camera(folder):
+    """Camera 0 of a synth capture's sparse/0 text model: PINHOLE intrinsics,
+    the world-to-camera rotation r (rows) and the centre in the world."""
+    cam = _records(os.path.join(folder, "sparse/0/cameras.txt"))[0].split()
+    if cam[1] != "PINHOLE":
+        raise SystemExit(f"scene_compare: {folder}: camera model {cam[1]}, expected PINHOLE")
+    fx, fy, cx, cy = map(float, cam[4:8])
+    img = _records(os.path.join(folder, "sparse/0/images.txt"))[0].split()
+    qw, qx, qy, qz, tx, ty, tz = map(float, img[1:8])
+    r = [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
+         [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
+         [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
+    t = [tx, ty, tz]
+    centre = [-sum(r[k][i] * t[k] for k in range(3)) for i in range(3)]
+    return {"fx": fx, "fy": fy, "cx": cx, "cy": cy, "r": r, "centre": centre}
+
+
+def flash(folder, camera):
+    """The flash of truth.json in the world (its offset is in camera
+    coordinates) and its intensity."""
+    truth = json.load(open(os.path.join(folder, "truth.json")))
+    offset, r = truth["flash"]["offset"], camera["r"]
+    position = [camera["centre"][i] + sum(r[k][i] * offset[k] for k in range(3))
+                for i in range(3)]
+    return position, truth["flash"]["intensity"]
+
+
+def exr_values(path, channels, prog):
+    """The first `channels` values of every pixel of an EXR, top row first,
+    through oiiotool --dumpdata (no Python bindings needed)."""
+    out = run(["oiiotool", "--dumpdata", path], "oiiotool --dumpdata", prog)
+    pixels = {}
+    for m in re.finditer(r"Pixel \((\d+), (\d+)\):((?: \S+)+)", out):
+        pixels[(int(m.group(2)), int(m.group(1)))] = [float(v) for v in m.group(3).split()][:channels]
+    return [v for key in sorted(pixels) for v in pixels[key]]
+
+
+def erode(mask, w, h, steps):
+    for _ in range(steps):
+        out = [False] * (w * h)
+        for y in range(1, h - 1):
+            row = y * w
+            for x in range(1, w - 1):
+                i = row + x
+                out[i] = mask[i] and mask[i - 1] and mask[i + 1] and mask[i - w] and mask[i + w]
+        mask = out
+    return mask
+
+
+def compare(c, b, coverage, w, h, margin, stride, prog):
+    """clayfit's c against the renderer's b (stride values a pixel, RGB first)
+    over the pixels the mask covers fully (coverage: one value a pixel), at
+    least `margin` pixels inside the silhouette. The relative RMSE is clayfit's
+    (fit_residuals.c): sqrt(sum (b - c)^2 / sum c^2) over pixels and channels;
+    also the ratio of the sums (a global gain) and the relative RMSE after the
+    best gain (what is left is the shape). Returns the figures, the pixels
+    compared and clayfit's mean value over them."""
+    mask = erode([coverage[i] >= 1.0 - 1e-6 for i in range(w * h)], w, h, margin)
+    inside = [i for i in range(w * h) if mask[i]]
+    if not inside:
+        raise SystemExit(f"{prog}: the mask leaves no pixel")
+    bc = bb2 = sum_b = sum_c = peak = max_d = 0.0
+    e2k, y2k = [0.0] * 3, [0.0] * 3
+    for i in inside:
+        for k in range(3):
+            cv, bv = float(c[stride * i + k]), float(b[stride * i + k])
+            if not (math.isfinite(cv) and math.isfinite(bv)):
+                raise SystemExit(f"{prog}: pixel {i % w}, {i // w} is not finite")
+            d = bv - cv
+            e2k[k] += d * d
+            y2k[k] += cv * cv
+            bc += bv * cv
+            bb2 += bv * bv
+            sum_b += bv
+            sum_c += cv
+            peak = max(peak, cv)
+            max_d = max(max_d, abs(d))
+    e2, y2 = sum(e2k), sum(y2k)
+    gain = bc / bb2 if bb2 > 0.0 else 0.0
+    # sum (g b - c)^2 = g^2 sum b^2 - 2 g sum bc + sum c^2
+    after = max(0.0, gain * gain * bb2 - 2.0 * gain * bc + y2)
+    result = {"pixels": len(inside), "relative_rmse": math.sqrt(e2 / y2),
+              "sum_ratio": sum_b / sum_c, "relative_rmse_after_gain": math.sqrt(after / y2),
+              "relative_rmse_per_channel": [math.sqrt(e2k[k] / y2k[k]) for k in range(3)],
+              "max_abs_diff_over_peak": max_d / peak}
+    return result, inside, sum_c / (3 * len(inside))
+
+
+def diff_values(c, b, inside, w, h, mean, stride):
+    """The difference image, RGB in [0, 1] (3 values a pixel, in c's pixel
+    order): (b - c) as grey 0.5 +/- 0.5 at +/- 25 % of clayfit's mean value
+    (each channel apart), black outside the compared pixels."""
+    scale = 0.25 * mean
+    img = [0.0] * (3 * w * h)
+    for i in inside:
+        for k in range(3):
+            d = 0.5 + 0.5 * (b[stride * i + k] - c[stride * i + k]) / scale
+            img[3 * i + k] = min(1.0, max(0.0, d))
+    return img
+
+
+def write_png(path, w, h, rgb):
+    """An 8-bit RGB PNG of values in [0, 1], top row first (zlib only)."""
+    raw = b"".join(b"\0" + bytes(int(round(255 * v)) for v in rgb[3 * w * y:3 * w * (y + 1)])
+                   for y in range(h))
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
+
+
+def report(r, max_rmse):
+    """One fit's JSON line and Markdown row; True when its relative RMSE is
+    above max_rmse (when given)."""
+    print(json.dumps(r))
+    print(f"| {r['fit']} | {100 * r['relative_rmse']:.2f} % | {r['sum_ratio']:.4f} | "
+          f"{100 * r['relative_rmse_after_gain']:.2f} % | {r['pixels']} |")
+    if max_rmse is not None and not r["relative_rmse"] <= max_rmse:
+        print(f"FAIL: {r['fit']}: relative RMSE {r['relative_rmse']:.4g} is above "
+              f"{max_rmse:.4g}")
+        return True
+    return False
+
+
+# --- three.js in headless Chromium -------------------------------------------
+
+# The page's camera: a THREE.PerspectiveCamera with colmap_camera()'s pose
+# (COLMAP's x right, y down, z forward -> three.js' y up, z back) and its
+# intrinsics (scaled by S for a supersampled target) as the projection.
+CAMERA_JS = r"""
+function colmapCamera(THREE, k, W, H, S) {
+  const cam = new THREE.PerspectiveCamera(30, W / H, 0.1, 100);
+  const r = k.r, c = k.centre;
+  const basis = new THREE.Matrix4().makeBasis(new THREE.Vector3(r[0][0], r[0][1], r[0][2]),
+    new THREE.Vector3(-r[1][0], -r[1][1], -r[1][2]), new THREE.Vector3(-r[2][0], -r[2][1], -r[2][2]));
+  cam.quaternion.setFromRotationMatrix(basis);
+  cam.position.set(c[0], c[1], c[2]);
+  cam.updateMatrixWorld(true);
+  const n = 0.1, f = 100;
+  const fx = k.fx * S, fy = k.fy * S, cx = k.cx * S, cy = k.cy * S;
+  cam.projectionMatrix.set(2 * fx / W, 0, 1 - 2 * cx / W, 0,
+                           0, 2 * fy / H, 2 * cy / H - 1, 0,
+                           0, 0, -(f + n) / (f - n), -2 * f * n / (f - n),
+                           0, 0, -1, 0);
+  cam.projectionMatrixInverse.copy(cam.projectionMatrix).invert();
+  return cam;
+}
+
+// a WebGL2 renderer with float render targets, linear output
+function floatRenderer(THREE, canvas) {
+  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
+  const gl = renderer.getContext();
+  if (!(gl instanceof WebGL2RenderingContext)) throw new Error('no WebGL2');
+  if (!gl.getExtension('EXT_color_buffer_float')) throw new Error('no EXT_color_buffer_float');
+  renderer.setPixelRatio(1);
+  return renderer;
+}
+
+function floatTarget(THREE, W, H) {
+  return new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType,
+    format: THREE.RGBAFormat, minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+    depthBuffer: true });
+}
+
+// the scene rendered into the float target: its RGBA, GL's rows (bottom first)
+function renderFloat(THREE, renderer, target, world, cam, W, H) {
+  renderer.setRenderTarget(target);
+  renderer.setClearColor(0x000000, 0);
+  renderer.clear();
+  renderer.render(world, cam);
+  const pixels = new Float32Array(W * H * 4);
+  renderer.readRenderTargetPixels(target, 0, 0, W, H, pixels);
+  return pixels;
+}
+
+// a Float32Array as base64 (the page's result travels in the DOM)
+function base64Floats(values) {
+  const bytes = new Uint8Array(values.buffer);
+  let text = '';
+  for (let i = 0; i < bytes.length; i += 8192)
+    text += String.fromCharCode.apply(null, bytes.subarray(i, i + 8192));
+  return btoa(text);
+}
+"""
+
+
+def chromium_skip(node_modules):
+    """(browser, None), or (None, the reason to skip: exit 77)."""
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if not browser:
+        return None, "SKIP: no Chromium (apt-get install chromium)"
+    for need in ("three/package.json", ".bin/esbuild"):
+        if not os.path.exists(os.path.join(node_modules, need)):
+            return None, f"SKIP: no {need} in {node_modules} (scripts/install-deps.sh installs it)"
+    if not shutil.which("oiiotool"):
+        return None, "SKIP: no oiiotool"
+    return browser, None
+
+
+def build_page(work, node_modules, script, prog):
+    """WORK/index.html running `script` (an ES module importing 'three', with
+    CAMERA_JS's functions in scope), bundled into a classic script by esbuild
+    (Chromium refuses ES modules from file://)."""
+    entry = os.path.join(work, "entry.js")
+    with open(entry, "w") as f:
+        f.write(script + CAMERA_JS)
+    env = dict(os.environ, NODE_PATH=node_modules)
+    esbuild = os.path.join(node_modules, ".bin", "esbuild")
+    run([esbuild, entry, "--bundle", "--format=iife", "--log-level=warning",
+         "--outfile=" + os.path.join(work, "bundle.js")], "esbuild", prog, env=env)
+    page = os.path.join(work, "index.html")
+    with open(page, "w") as f:
+        f.write('<!doctype html><html><body><pre id="out">PENDING</pre>'
+                '<script src="bundle.js"></script></body></html>')
+    return page
+
+
+def run_chromium(browser, page, budget_ms, timeout, prog):
+    """The JSON the page writes into #out as 'RESULT json END' (or 'ERROR
+    message END'), read back with --dump-dom."""
+    cmd = [browser, "--headless", "--no-sandbox", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--hide-scrollbars",
+           f"--virtual-time-budget={budget_ms}", "--dump-dom", "file://" + page]
+    dom = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    m = re.search(r"(RESULT|ERROR) (.*?) END", dom.stdout, re.S)
+    if not m:
+        raise SystemExit(f"{prog}: the page did not finish: " + dom.stderr[-2000:])
+    if m.group(1) == "ERROR":
+        raise SystemExit(f"{prog}: the page failed: " + m.group(2))
+    return json.loads(m.group(2))
