@@ -23,9 +23,11 @@ ROUNDTRIP = os.path.join(HERE, "..", "..", "scripts", "roundtrip.py")
 # Tolerances of the flash + linear case, M2 through the exporter's v1 mapping. The measured
 # errors (docs/roundtrip.md) are Burley's diffuse against Oren-Nayar, the ground's
 # inter-reflection and Cycles' noise at 32 samples: roughness +8 %, Base Color +9..11 %,
-# Specular +34 %, relative RMSE 10 %.
+# Specular +34 %, relative RMSE 10 %. The sphere's centre: 0.015-0.058 radii over runs
+# (COLMAP's threads make each run's poses a little different; the similarity to Blender's
+# centres alone leaves 0.03).
 TOLERANCE = {"roughness": 0.15, "base_color": 0.15, "specular": 0.5, "relative_rmse": 0.13,
-             "centre_radii": 0.05, "radius": 0.01}
+             "centre_radii": 0.1, "radius": 0.01}
 
 
 def parse_args():
