@@ -33,6 +33,9 @@ import sys
 
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_common as bc  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -85,14 +88,6 @@ def rotation(q):
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
 
 
-def clear_scene():
-    for o in list(bpy.data.objects):
-        bpy.data.objects.remove(o, do_unlink=True)
-    for collection in (bpy.data.meshes, bpy.data.lights, bpy.data.cameras, bpy.data.materials):
-        for block in list(collection):
-            collection.remove(block)
-
-
 def add_camera(scene, pose, camera):
     import mathutils
     w, h, fx, fy, cx, cy = camera
@@ -136,43 +131,9 @@ def add_flash(scene, r, centre, flash):
     scene.collection.objects.link(light)
 
 
-def add_sphere(scene, sphere, material):
-    """One vertex turned into a point of radius R by geometry nodes: an exact sphere."""
-    mesh = bpy.data.meshes.new("sphere_point")
-    mesh.from_pydata([tuple(sphere["center"])], [], [])
-    obj = bpy.data.objects.new("sphere", mesh)
-    scene.collection.objects.link(obj)
-    tree = bpy.data.node_groups.new("clayfit_sphere", "GeometryNodeTree")
-    tree.inputs.new("NodeSocketGeometry", "Geometry")
-    tree.outputs.new("NodeSocketGeometry", "Geometry")
-    nodes, links = tree.nodes, tree.links
-    group_in = nodes.new("NodeGroupInput")
-    group_out = nodes.new("NodeGroupOutput")
-    to_points = nodes.new("GeometryNodeMeshToPoints")
-    to_points.inputs["Radius"].default_value = sphere["radius"]
-    set_material = nodes.new("GeometryNodeSetMaterial")
-    set_material.inputs["Material"].default_value = material
-    links.new(group_in.outputs["Geometry"], to_points.inputs["Mesh"])
-    links.new(to_points.outputs["Points"], set_material.inputs["Geometry"])
-    links.new(set_material.outputs["Geometry"], group_out.inputs["Geometry"])
-    modifier = obj.modifiers.new("clayfit_sphere", "NODES")
-    modifier.node_group = tree
-
-
 def make_material(args):
     if args.diffuse_only:
-        material = bpy.data.materials.new("clayfit_lambert")
-        material.use_nodes = True
-        nodes = material.node_tree.nodes
-        for n in list(nodes):
-            if n.type != "OUTPUT_MATERIAL":
-                nodes.remove(n)
-        diffuse = nodes.new("ShaderNodeBsdfDiffuse")
-        diffuse.inputs["Color"].default_value = (*args.diffuse_only, 1.0)
-        diffuse.inputs["Roughness"].default_value = 0.0
-        output = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-        material.node_tree.links.new(diffuse.outputs["BSDF"], output.inputs["Surface"])
-        return material
+        return bc.lambert_material("clayfit_lambert", args.diffuse_only)
     preset = runpy.run_path(args.preset, run_name="clayfit_preset")
     material = preset["build"]()
     bsdf = next(n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
@@ -185,42 +146,25 @@ def make_material(args):
 
 
 def set_render(scene, args):
-    scene.render.engine = "CYCLES"
+    bc.set_cycles(scene, args.samples, args.seed, 0)  # direct light only
     c = scene.cycles
-    c.device = "CPU"
-    c.samples = args.samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.seed = args.seed
     c.pixel_filter_type = "BOX"
     c.filter_width = 1.0
-    c.max_bounces = 0  # direct light only
-    for name in ("diffuse_bounces", "glossy_bounces", "transmission_bounces",
-                 "volume_bounces", "transparent_max_bounces"):
+    for name in ("transmission_bounces", "volume_bounces", "transparent_max_bounces"):
         setattr(c, name, 0)
-    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
     c.light_sampling_threshold = 0.0
-    c.blur_glossy = 0.0
-    c.caustics_reflective = c.caustics_refractive = False
     if hasattr(c, "use_guiding"):
         c.use_guiding = False
     c.film_exposure = 1.0
-    scene.render.film_transparent = False
     world = bpy.data.worlds.new("black")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
     scene.world = world
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
     scene.render.image_settings.color_mode = "RGB"
     scene.render.image_settings.exr_codec = "ZIP"
-    scene.render.use_compositing = False
-    scene.render.use_sequencer = False
     scene.render.threads_mode = "AUTO"
 
 
@@ -229,11 +173,12 @@ def main():
     with open(os.path.join(args.capture, "truth.json"), encoding="utf-8") as f:
         truth = json.load(f)
     pose, camera = read_colmap(os.path.join(args.capture, "sparse", "0"), args.image)
-    clear_scene()
+    bc.clear_scene()
     scene = bpy.context.scene
     r, centre = add_camera(scene, pose, camera)
     add_flash(scene, r, centre, truth["flash"])
-    add_sphere(scene, truth["sphere"], make_material(args))
+    bc.add_exact_sphere(scene, truth["sphere"]["center"], truth["sphere"]["radius"],
+                        make_material(args))
     set_render(scene, args)
     scene.render.filepath = os.path.abspath(args.out)
     bpy.ops.render.render(write_still=True)

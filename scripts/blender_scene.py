@@ -42,6 +42,9 @@ import time
 import bpy
 import mathutils
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_common as bc  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -80,32 +83,9 @@ SPHERE_CENTRE = (0.0, 0.0, 1.0)
 SPHERE_RADIUS = 1.0
 
 
-def clear_scene():
-    for o in list(bpy.data.objects):
-        bpy.data.objects.remove(o, do_unlink=True)
-    for collection in (bpy.data.meshes, bpy.data.lights, bpy.data.cameras, bpy.data.materials):
-        for block in list(collection):
-            collection.remove(block)
-
-
-def lambert(args):
-    m = bpy.data.materials.new("lambert_truth")
-    m.use_nodes = True
-    nodes = m.node_tree.nodes
-    for n in list(nodes):
-        if n.type != "OUTPUT_MATERIAL":
-            nodes.remove(n)
-    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (*args.base_color, 1.0)
-    diffuse.inputs["Roughness"].default_value = 0.0
-    out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-    m.node_tree.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
-    return m
-
-
 def principled(args):
     if args.material == "lambert":
-        return lambert(args)
+        return bc.lambert_material("lambert_truth", args.base_color)
     m = bpy.data.materials.new("principled_truth")
     m.use_nodes = True
     nodes = m.node_tree.nodes
@@ -157,27 +137,6 @@ def textured(name, colour_a, colour_b, scale, seed):
     links.new(mix.outputs["Color"], diffuse.inputs["Color"])
     links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
     return m
-
-
-def add_sphere(scene, material):
-    """One vertex turned into a point of radius R by geometry nodes: an exact sphere."""
-    mesh = bpy.data.meshes.new("sphere_point")
-    mesh.from_pydata([SPHERE_CENTRE], [], [])
-    obj = bpy.data.objects.new("sphere", mesh)
-    scene.collection.objects.link(obj)
-    tree = bpy.data.node_groups.new("sphere", "GeometryNodeTree")
-    tree.inputs.new("NodeSocketGeometry", "Geometry")
-    tree.outputs.new("NodeSocketGeometry", "Geometry")
-    nodes, links = tree.nodes, tree.links
-    group_in, group_out = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
-    to_points = nodes.new("GeometryNodeMeshToPoints")
-    to_points.inputs["Radius"].default_value = SPHERE_RADIUS
-    set_material = nodes.new("GeometryNodeSetMaterial")
-    set_material.inputs["Material"].default_value = material
-    links.new(group_in.outputs["Geometry"], to_points.inputs["Mesh"])
-    links.new(to_points.outputs["Points"], set_material.inputs["Geometry"])
-    links.new(set_material.outputs["Geometry"], group_out.inputs["Geometry"])
-    obj.modifiers.new("sphere", "NODES").node_group = tree
 
 
 def add_mesh(scene, name, verts, faces, material):
@@ -281,26 +240,8 @@ def set_world(scene, args):
 
 
 def set_render(scene, args):
-    scene.render.engine = "CYCLES"
-    c = scene.cycles
-    c.device = "CPU"
-    c.samples = args.samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.seed = args.seed
-    c.max_bounces = args.bounces
-    c.diffuse_bounces = c.glossy_bounces = args.bounces
-    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-    c.blur_glossy = 0.0
-    c.caustics_reflective = c.caustics_refractive = False
-    scene.render.film_transparent = False
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
+    bc.set_cycles(scene, args.samples, args.seed, args.bounces)
     scene.display_settings.display_device = "sRGB"
-    scene.render.use_compositing = False
-    scene.render.use_sequencer = False
 
 
 def save(scene, path, fmt):
@@ -323,9 +264,9 @@ def main():
     args = parse_args()
     for sub in ("png8", "linear"):
         os.makedirs(os.path.join(args.out, sub), exist_ok=True)
-    clear_scene()
+    bc.clear_scene()
     scene = bpy.context.scene
-    add_sphere(scene, principled(args))
+    bc.add_exact_sphere(scene, SPHERE_CENTRE, SPHERE_RADIUS, principled(args))
     add_set(scene, args.seed, backdrop=args.light == "flash")  # the map is the hdri's backdrop
     cam = add_camera(scene, args)
     flash = add_flash(scene, args) if args.light == "flash" else None
