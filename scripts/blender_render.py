@@ -35,6 +35,7 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_common as bc  # noqa: E402
+import scene_compare as sc  # noqa: E402
 
 
 def parse_args():
@@ -80,22 +81,12 @@ def read_colmap(sparse, index):
     return images[index]
 
 
-def rotation(q):
-    """World-to-camera rotation (row-major 3x3) of a unit quaternion (qw, qx, qy, qz)."""
-    w, x, y, z = q
-    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
-
-
 def add_camera(scene, pose, camera):
     import mathutils
     w, h, fx, fy, cx, cy = camera
     if abs(fx - fy) > 1e-9 * fx:
         raise SystemExit(f"blender_render: fx {fx} != fy {fy}: square pixels only")
-    r = rotation(pose[:4])
-    t = pose[4:7]
-    centre = [-sum(r[i][k] * t[i] for i in range(3)) for k in range(3)]
+    r, centre = sc.rotation(pose[:4]), sc.camera_centre(pose[:4], pose[4:7])
     data = bpy.data.cameras.new("camera")
     data.sensor_fit = "HORIZONTAL"
     data.sensor_width = 36.0
@@ -119,9 +110,7 @@ def add_camera(scene, pose, camera):
     return r, centre
 
 
-def add_flash(scene, r, centre, flash):
-    offset, intensity = flash["offset"], flash["intensity"]
-    position = [centre[k] + sum(r[i][k] * offset[i] for i in range(3)) for k in range(3)]
+def add_flash(scene, position, intensity):
     data = bpy.data.lights.new("flash", "POINT")
     data.energy = 4.0 * math.pi * intensity
     data.color = (1.0, 1.0, 1.0)
@@ -176,7 +165,7 @@ def main():
     bc.clear_scene()
     scene = bpy.context.scene
     r, centre = add_camera(scene, pose, camera)
-    add_flash(scene, r, centre, truth["flash"])
+    add_flash(scene, *sc.flash(args.capture, {"r": r, "centre": centre}))
     bc.add_exact_sphere(scene, truth["sphere"]["center"], truth["sphere"]["radius"],
                         make_material(args))
     set_render(scene, args)

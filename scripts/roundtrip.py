@@ -39,6 +39,8 @@ import subprocess
 import sys
 import time
 
+from scene_compare import camera_centre, rotation
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -174,18 +176,6 @@ def model_for(txt, out, extension):
                 v[9] = os.path.splitext(v[9])[0] + extension
                 line = " ".join(v) + "\n"
             f.write(line)
-
-
-def rotation(q):
-    w, x, y, z = q
-    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
-
-
-def camera_centre(q, t):
-    r = rotation(q)
-    return [-sum(r[i][k] * t[i] for i in range(3)) for k in range(3)]
 
 
 def jacobi_top_eigenvector(a):

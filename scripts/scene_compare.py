@@ -61,6 +61,20 @@ def _records(path):
     return [line for line in open(path).read().split("\n") if line and not line.startswith("#")]
 
 
+def rotation(q):
+    """COLMAP's world-to-camera rotation (rows) of a unit quaternion (qw, qx, qy, qz)."""
+    w, x, y, z = q
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+
+
+def camera_centre(q, t):
+    """The camera's centre in the world, −Rᵀ t, of COLMAP's pose (q, t)."""
+    r = rotation(q)
+    return [-sum(r[k][i] * t[k] for k in range(3)) for i in range(3)]
+
+
 def colmap_camera(folder):
     """Camera 0 of a synth capture's sparse/0 text model: PINHOLE intrinsics,
     the world-to-camera rotation r (rows) and the centre in the world."""
@@ -69,12 +83,8 @@ def colmap_camera(folder):
         raise SystemExit(f"scene_compare: {folder}: camera model {cam[1]}, expected PINHOLE")
     fx, fy, cx, cy = map(float, cam[4:8])
     img = _records(os.path.join(folder, "sparse/0/images.txt"))[0].split()
-    qw, qx, qy, qz, tx, ty, tz = map(float, img[1:8])
-    r = [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-         [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-         [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
-    t = [tx, ty, tz]
-    centre = [-sum(r[k][i] * t[k] for k in range(3)) for i in range(3)]
+    pose = [float(x) for x in img[1:8]]
+    r, centre = rotation(pose[:4]), camera_centre(pose[:4], pose[4:7])
     return {"fx": fx, "fy": fy, "cx": cx, "cy": cy, "r": r, "centre": centre}
 
 
