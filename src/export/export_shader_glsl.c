@@ -120,22 +120,32 @@ static void uniform_vec3(export_text *t, const char *name, const double *x) {
                 x[2]);
 }
 
+/* The parameter table's default (docs/model.md §1.6). */
+static double table_default(cf_param_id id) {
+  return cf_param_info_get(id)->default_value;
+}
+
 /* The fitted values; the parameters a rung does not have keep the table's
  * defaults (unused by its code). */
 static void write_uniforms(export_text *t, const export_material *m) {
-  int rung = export_shader_rung(m);
-  static const double tau_default[3] = {0.1, 0.1, 0.1};
+  int rung = export_shader_rung(m), interface = rung == 2 || rung == 3;
+  double tau = table_default(CF_PARAM_OPTICAL_DEPTH), tau_default[3] = {tau, tau, tau};
   uniform_vec3(t, "clayfitAlbedo", m->albedo);
   uniform_float(t, "clayfitDiffuseRoughness", m->sigma);
-  uniform_float(t, "clayfitRoughness", rung == 2 || rung == 3 ? m->roughness : 0.5);
-  uniform_float(t, "clayfitF0", rung == 2 || rung == 3 ? m->f0 : 0.04);
-  uniform_float(t, "clayfitCoatWeight", rung == 3 ? m->coat_weight : 0.0);
-  uniform_float(t, "clayfitCoatGloss", rung == 3 ? m->coat_gloss : 1.0);
-  uniform_float(t, "clayfitFilmRoughness", rung == 4 ? m->film_roughness : 0.15);
-  uniform_float(t, "clayfitFilmF0", rung == 4 ? m->film_f0 : 0.02);
+  uniform_float(t, "clayfitRoughness",
+                interface ? m->roughness : table_default(CF_PARAM_ROUGHNESS));
+  uniform_float(t, "clayfitF0", interface ? m->f0 : table_default(CF_PARAM_F0));
+  uniform_float(t, "clayfitCoatWeight",
+                rung == 3 ? m->coat_weight : table_default(CF_PARAM_COAT_WEIGHT));
+  uniform_float(t, "clayfitCoatGloss",
+                rung == 3 ? m->coat_gloss : table_default(CF_PARAM_COAT_GLOSS));
+  uniform_float(t, "clayfitFilmRoughness",
+                rung == 4 ? m->film_roughness : table_default(CF_PARAM_FILM_ROUGHNESS));
+  uniform_float(t, "clayfitFilmF0", rung == 4 ? m->film_f0 : table_default(CF_PARAM_FILM_F0));
   uniform_vec3(t, "clayfitOpticalDepth", rung == 4 ? m->tau : tau_default);
-  uniform_float(t, "clayfitBaseRoughness", rung == 4 ? m->base_roughness : 0.5);
-  uniform_float(t, "clayfitBaseF0", rung == 4 ? m->base_f0 : 0.004);
+  uniform_float(t, "clayfitBaseRoughness",
+                rung == 4 ? m->base_roughness : table_default(CF_PARAM_BASE_ROUGHNESS));
+  uniform_float(t, "clayfitBaseF0", rung == 4 ? m->base_f0 : table_default(CF_PARAM_BASE_F0));
   uniform_float(t, "clayfitTail", m->tail);
 }
 

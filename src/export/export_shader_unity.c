@@ -13,35 +13,42 @@
 
 /* Properties: Vector for RGB values (a Color would be converted from sRGB
  * in a linear-space project), Range for scalars (the parameter table's). */
+/* A scalar property with the parameter table's range (docs/model.md §1.6). */
+static void property_range(export_text *t, const char *property, const char *label, cf_param_id id,
+                           double value) {
+  const cf_param_info *p = cf_param_info_get(id);
+  export_printf(t, "    %s (\"%s\", Range(%.9g, %.9g)) = %.9g\n", property, label, p->lower,
+                p->upper, value);
+}
+
 static void properties(export_text *t, const export_material *m) {
   int rung = export_shader_rung(m);
   export_printf(t, "  Properties {\n");
   export_printf(t, "    _Albedo (\"albedo (linear RGB)\", Vector) = (%.9g, %.9g, %.9g, 0)\n",
                 m->albedo[0], m->albedo[1], m->albedo[2]);
   if (rung >= 1)
-    export_printf(t, "    _DiffuseRoughness (\"diffuse_roughness (rad)\", Range(0, 1.2)) = %.9g\n",
-                  m->sigma);
+    property_range(t, "_DiffuseRoughness", "diffuse_roughness (rad)", CF_PARAM_DIFFUSE_ROUGHNESS,
+                   m->sigma);
   if (rung == 2 || rung == 3) {
-    export_printf(t, "    _Roughness (\"roughness\", Range(0.03, 1)) = %.9g\n", m->roughness);
-    export_printf(t, "    _F0 (\"f0\", Range(0, 0.25)) = %.9g\n", m->f0);
+    property_range(t, "_Roughness", "roughness", CF_PARAM_ROUGHNESS, m->roughness);
+    property_range(t, "_F0", "f0", CF_PARAM_F0, m->f0);
   }
   if (rung == 3) {
-    export_printf(t, "    _CoatWeight (\"coat_weight\", Range(0, 1)) = %.9g\n", m->coat_weight);
-    export_printf(t, "    _CoatGloss (\"coat_gloss\", Range(0, 1)) = %.9g\n", m->coat_gloss);
+    property_range(t, "_CoatWeight", "coat_weight", CF_PARAM_COAT_WEIGHT, m->coat_weight);
+    property_range(t, "_CoatGloss", "coat_gloss", CF_PARAM_COAT_GLOSS, m->coat_gloss);
   }
   if (rung == 4) {
-    export_printf(t, "    _FilmRoughness (\"film_roughness\", Range(0.03, 1)) = %.9g\n",
-                  m->film_roughness);
-    export_printf(t, "    _FilmF0 (\"film_f0\", Range(0.01, 0.25)) = %.9g\n", m->film_f0);
+    property_range(t, "_FilmRoughness", "film_roughness", CF_PARAM_FILM_ROUGHNESS,
+                   m->film_roughness);
+    property_range(t, "_FilmF0", "film_f0", CF_PARAM_FILM_F0, m->film_f0);
     export_printf(t,
                   "    _OpticalDepth (\"optical_depth (RGB)\", Vector) = (%.9g, %.9g, %.9g, 0)\n",
                   m->tau[0], m->tau[1], m->tau[2]);
-    export_printf(t, "    _BaseRoughness (\"base_roughness\", Range(0.03, 1)) = %.9g\n",
-                  m->base_roughness);
-    export_printf(t, "    _BaseF0 (\"base_f0\", Range(0, 0.25)) = %.9g\n", m->base_f0);
+    property_range(t, "_BaseRoughness", "base_roughness", CF_PARAM_BASE_ROUGHNESS,
+                   m->base_roughness);
+    property_range(t, "_BaseF0", "base_f0", CF_PARAM_BASE_F0, m->base_f0);
   }
-  if (m->lobe_count > 0)
-    export_printf(t, "    _Tail (\"tail (gamma)\", Range(1.6, 100)) = %.9g\n", m->tail);
+  if (m->lobe_count > 0) property_range(t, "_Tail", "tail (gamma)", CF_PARAM_TAIL, m->tail);
   export_printf(t, "    _Exposure (\"exposure\", Float) = 1\n  }\n");
 }
 
