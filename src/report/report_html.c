@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "clayfit/image.h"
 #include "core/text_escape.h"
 #include "report_internal.h"
 #include "svg.h"
@@ -303,8 +304,7 @@ static void colour_scale(FILE *f) {
     /* the stops in sRGB, as the PNGs hold them */
     int c8[3];
     for (int c = 0; c < 3; ++c) {
-      double v = rgb[c] <= 0.0031308 ? 12.92 * rgb[c] : 1.055 * pow(rgb[c], 1.0 / 2.4) - 0.055;
-      c8[c] = (int)lround(255.0 * v);
+      c8[c] = (int)lround(255.0 * cf_linear_to_srgb(rgb[c]));
     }
     fprintf(f, "<stop offset=\"%d%%\" stop-color=\"rgb(%d,%d,%d)\"/>", i * 10, c8[0], c8[1], c8[2]);
   }

@@ -4,7 +4,7 @@ clayfit_c_test(test_sphere_fit SOURCES capture/test_sphere_fit.c
 clayfit_c_test(test_sphere_detect SOURCES capture/test_sphere_detect.c
                LIBS clayfit_sphere m LABELS capture)
 clayfit_c_test(test_sphere_dark_limb SOURCES capture/test_sphere_dark_limb.c
-               LIBS clayfit_sphere m LABELS capture)
+               LIBS clayfit_sphere clayfit_image m LABELS capture)
 # The real DiLiGenT ball (skipped without ../shared/data): its mask is read
 # with OpenCV's imgcodecs, in a test-only C++ helper.
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs)

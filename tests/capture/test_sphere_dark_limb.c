@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "capture/sphere_silhouette.h"
+#include "clayfit/image.h"
 #include "core/rng.h"
 #include "support/check.h"
 
@@ -45,11 +46,6 @@ static double radiance(double u, double v) {
   return 0.3 * nl * (1.0 - fresnel(n[2])) * (1.0 - fresnel(nl));
 }
 
-static double srgb(double linear) {
-  linear = linear < 0.0 ? 0.0 : linear > 1.0 ? 1.0 : linear;
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1.0 / 2.4) - 0.055;
-}
-
 /* The 8-bit photo with a little read noise, grey in all three channels. */
 static float *render_photo(cf_rng *rng) {
   float *pixels = malloc(sizeof(float) * W * H * 3);
@@ -60,7 +56,8 @@ static float *render_photo(cf_rng *rng) {
       for (int j = 0; j < SS; ++j)
         for (int i = 0; i < SS; ++i) sum += radiance(x + (i + 0.5) / SS, y + (j + 0.5) / SS);
       double noisy = sum / (SS * SS) + 0.002 * (cf_rng_uniform(rng) - 0.5) * 2.0;
-      float code = (float)(floor(255.0 * srgb(noisy) + 0.5) / 255.0);
+      double clipped = noisy < 0.0 ? 0.0 : noisy > 1.0 ? 1.0 : noisy;
+      float code = (float)(floor(255.0 * cf_linear_to_srgb(clipped) + 0.5) / 255.0);
       for (int c = 0; c < 3; ++c) pixels[3 * (y * W + x) + c] = code;
     }
   return pixels;
