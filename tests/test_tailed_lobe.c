@@ -585,6 +585,128 @@ static void check_white_furnace(void) {
          at_gamma, at_c);
 }
 
+/* ---- 7b. the lobe over blocks (tailed_block.c): the vector path's exp
+ * and log1p against libm, and its D V against std_dv's ---- */
+
+/* |a − b| in units of b's last place (of the least subnormal below DBL_MIN) */
+static double ulps_from(double a, double b) {
+  if (a == b) return 0.0;
+  double b_abs = fabs(b), ulp = nextafter(b_abs, INFINITY) - b_abs;
+  return fabs(a - b) / (b_abs < DBL_MIN ? 0x1p-1074 : ulp);
+}
+
+/* exp over y in [−745, 0] (y = γ ln r) and log1p over x in [0, 1e70]
+ * (x = tan²θ_h/β²; up to 1e66 at the floors), each within 1 ulp of libm
+ * (libm's exp and log1p are themselves within 1 ulp). */
+static void check_block_math(cf_rng *rng) {
+  double worst_exp = 0.0, worst_log = 0.0, at_exp = 0.0, at_log = 0.0;
+  for (int i = 0; i < 250000; ++i) {
+    double y[CF_STD_BLOCK], x[CF_STD_BLOCK], e[CF_STD_BLOCK], l[CF_STD_BLOCK];
+    for (int k = 0; k < CF_STD_BLOCK; ++k) {
+      double u = cf_rng_uniform(rng);
+      y[k] = (k & 1) ? -745.0 * u : -u * pow(10.0, cf_rng_range(rng, -20.0, 1.0));
+      x[k] = (k & 1) ? pow(10.0, cf_rng_range(rng, -300.0, 70.0)) : 4.0 * u;
+    }
+    if (i == 0) y[0] = 0.0, y[1] = -745.0, x[0] = 0.0, x[1] = 1e-320; /* 0 and a subnormal */
+    cf_std_block_exp(y, e);
+    cf_std_block_log1p(x, l);
+    for (int k = 0; k < CF_STD_BLOCK; ++k) {
+      double de = ulps_from(e[k], exp(y[k])), dl = ulps_from(l[k], log1p(x[k]));
+      if (de > worst_exp) worst_exp = de, at_exp = y[k];
+      if (dl > worst_log) worst_log = dl, at_log = x[k];
+    }
+  }
+  CHECK(worst_exp <= 1.0, "block exp: %.2f ulps from libm at %.17g", worst_exp, at_exp);
+  CHECK(worst_log <= 1.0, "block log1p: %.2f ulps from libm at %.17g", worst_log, at_log);
+  printf("block exp and log1p (%s): %.2f and %.2f ulps from libm at worst\n",
+         cf_std_block_vector() ? "the vector path" : "libm's, no vector path here", worst_exp,
+         worst_log);
+}
+
+/* One entry of the vector path against std_dv's: |Δ| <= tol (|x| + |D V| s),
+ * s the entry's natural scale (below). */
+static double block_error(double vec, double ref, double dv, double scale) {
+  if (vec == ref) return 0.0;
+  if (!isfinite(vec) || !isfinite(ref)) return INFINITY;
+  return fabs(vec - ref) / (fabs(ref) + fabs(dv) * scale);
+}
+
+/* The vector path's D V and its partials against std_dv (the scalar path)
+ * on random geometries (a third grazing) and the hard-case grid, over the
+ * tail's range and r from 0.03 to 1. The tolerance is relative, scaled by
+ * what an error of ε in ln r (the scalar path takes ln(1 + x), the vector
+ * path log1p) does to D (γ ε, and |γ ln r| ε through exp): every entry
+ * within tol (1 + γ + |γ ln r|)(|x| + |D V| s) of std_dv's, s its natural
+ * scale: 0 for D V, 1/α² for ∂/∂α², 1 + |ln r| for ∂/∂γ, (γ + 2)/(q cos²θ_h)
+ * for ∂/∂sin²θ_h, 1/c for ∂/∂c. */
+#define BLOCK_TOLERANCE 1e-14
+static void check_block_lobe(cf_rng *rng) {
+  enum { MAX = 512 };
+  static double n[MAX][3], l[MAX][3], v[MAX][3];
+  size_t hard = hard_geometries(n, l, v, MAX);
+  static const double gammas[] = {1.5 + 1e-6, 1.55, 1.7,  1.9,   2.5, 3.0,  5.0,
+                                  20.0,       63.0, 64.0, 100.0, 1e4, 9.9e5};
+  const int n_gamma = (int)(sizeof gammas / sizeof gammas[0]);
+  double worst[6] = {0.0};
+  static const char *const names[6] = {"D V", "d_a2", "d_gamma", "d_sin2", "d_ci", "d_co"};
+  long count = 0;
+  for (int j = 0; j < n_gamma; ++j) {
+    cf_std_table tb;
+    cf_std_table_build(&tb, gammas[j]);
+    for (int block = 0; block < 400 + (int)hard / CF_STD_BLOCK + 1; ++block) {
+      /* two lobes of one tail, as M4T's film and base; r at its bounds too */
+      cf_std_tail t[2];
+      cf_std_block_in in[2];
+      for (int lobe = 0; lobe < 2; ++lobe) {
+        int pick = (2 * block + lobe) % 5;
+        double r = pick == 0 ? 0.03 : pick == 1 ? 1.0 : cf_rng_range(rng, 0.03, 1.0);
+        t[lobe] = cf_std_tail_prepare(r * r * r * r, gammas[j]);
+        for (int k = 0; k < CF_STD_BLOCK; ++k) {
+          size_t h = block < 400 || lobe ? hard : (size_t)(block - 400) * CF_STD_BLOCK + (size_t)k;
+          cf_geometry g =
+              h < hard ? cf_geometry_from_directions(n[h], l[h], v[h]) : random_case(rng, 0.3).g;
+          if (!cf_geometry_is_lit(&g)) g = random_case(rng, 0.3).g;
+          in[lobe].sin2[k] = g.sin2_h, in[lobe].cos2[k] = g.cos2_h;
+          in[lobe].c_i[k] = g.cos_i, in[lobe].c_o[k] = g.cos_o;
+        }
+      }
+      cf_std_dv_block vec[2], ref[2];
+      cf_std_dv_block_eval(t, &tb, 1, 2, in, 1, vec);
+      cf_std_dv_block_eval(t, &tb, 0, 2, in, 1, ref);
+      for (int lobe = 0; lobe < 2; ++lobe)
+        for (int k = 0; k < CF_STD_BLOCK; ++k) {
+          const cf_std_tail *tl = &t[lobe];
+          const cf_std_block_in *x = &in[lobe];
+          const cf_std_dv_block *a = &vec[lobe], *b = &ref[lobe];
+          double c2 = x->cos2[k] > CF_STD_COS2_MIN ? x->cos2[k] : CF_STD_COS2_MIN;
+          double q = x->sin2[k] + tl->b2 * c2, ln_r = -log1p(x->sin2[k] / (tl->b2 * c2));
+          double dv = b->value[k], amp = 1.0 + tl->gamma + fabs(tl->gamma * ln_r);
+          double e[6] = {
+              block_error(a->value[k], b->value[k], 0.0, 0.0) / amp,
+              block_error(a->d_a2[k], b->d_a2[k], dv, 1.0 / tl->a2) / amp,
+              block_error(a->d_gamma[k], b->d_gamma[k], dv, 1.0 + fabs(ln_r)) / amp,
+              block_error(a->d_sin2[k], b->d_sin2[k], dv, (tl->gamma + 2.0) / (q * c2)) / amp,
+              block_error(a->d_ci[k], b->d_ci[k], dv, 1.0 / x->c_i[k]) / amp,
+              block_error(a->d_co[k], b->d_co[k], dv, 1.0 / x->c_o[k]) / amp,
+          };
+          for (int m = 0; m < 6; ++m) {
+            CHECK(e[m] <= BLOCK_TOLERANCE,
+                  "block lobe %s: gamma %g a2 %g sin2 %g cos2 %g c_i %g c_o %g: %.17g, std_dv "
+                  "%.17g",
+                  names[m], tl->gamma, tl->a2, x->sin2[k], x->cos2[k], x->c_i[k], x->c_o[k],
+                  (&a->value[0])[m * CF_STD_BLOCK + k], (&b->value[0])[m * CF_STD_BLOCK + k]);
+            if (e[m] > worst[m]) worst[m] = e[m];
+          }
+          ++count;
+        }
+    }
+  }
+  printf("block lobe (%s) against std_dv, %ld evaluations: worst scaled errors",
+         cf_std_block_vector() ? "vector path" : "no vector path here: std_dv itself", count);
+  for (int m = 0; m < 6; ++m) printf(" %s %.2g", names[m], worst[m]);
+  printf(" (tolerance %.0e)\n", BLOCK_TOLERANCE);
+}
+
 /* ---- 8. the hard-case grid and the Beckmann limit ---- */
 
 #ifndef HARD_ANGLE_MIN
@@ -1062,7 +1184,7 @@ static void print_cost(cf_rng *rng) {
 
 /* Usage: test_tailed_lobe [SECTION]: all sections, or the one named
  * (special, ggx, normalisation, gradients, reciprocity, furnace, hard,
- * beckmann, bench). */
+ * beckmann, table, block, bench). */
 int main(int argc, char **argv) {
   const char *only = argc > 1 ? argv[1] : NULL;
 #define SECTION(name, call) \
@@ -1081,6 +1203,8 @@ int main(int argc, char **argv) {
   SECTION("table", check_table_first_node());
   SECTION("table", check_table_gradients(&rng));
   SECTION("table", check_table_ggx_reciprocity_hard(&rng));
+  SECTION("block", check_block_math(&rng));
+  SECTION("block", check_block_lobe(&rng));
   SECTION("bench", print_cost(&rng));
 #undef SECTION
   return check_finish("test_tailed_lobe");

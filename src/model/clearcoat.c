@@ -49,4 +49,5 @@ static void clearcoat_value_grad(const cf_prepared *prep, const cf_geometry *g, 
   clearcoat_eval(&prep->clearcoat, g, f, grad);
 }
 
-const cf_model_impl cf_clearcoat_impl = {clearcoat_prepare, clearcoat_value, clearcoat_value_grad};
+const cf_model_impl cf_clearcoat_impl = {clearcoat_prepare, clearcoat_value, clearcoat_value_grad,
+                                         NULL};

@@ -79,7 +79,7 @@ static void dielectric_value_grad(const cf_prepared *prep, const cf_geometry *g,
 }
 
 const cf_model_impl cf_dielectric_impl = {dielectric_prepare, dielectric_value,
-                                          dielectric_value_grad};
+                                          dielectric_value_grad, NULL};
 
 /* M2T: M2's vector plus the tail (model.h). */
 static void dielectric_tailed_prepare(const double *params, cf_prepared *prep) {
@@ -99,4 +99,4 @@ static void dielectric_tailed_value_grad(const cf_prepared *prep, const cf_geome
 }
 
 const cf_model_impl cf_dielectric_tailed_impl = {dielectric_tailed_prepare, dielectric_tailed_value,
-                                                 dielectric_tailed_value_grad};
+                                                 dielectric_tailed_value_grad, NULL};

@@ -45,6 +45,7 @@ cf_status cf_eval_batch(cf_model_id model, const double *params, size_t count,
   if (!impl) return CF_EINVAL;
   cf_prepared prep;
   impl->prepare(params, &prep);
+  if (impl->batch && impl->batch(&prep, count, geometry, f, grad)) return CF_OK;
   const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
   for (size_t i = 0; i < count; ++i)
     eval_one(impl, &prep, &geometry[i], row, f + 3 * i, grad ? grad + row * i : NULL);
@@ -59,9 +60,27 @@ cf_status cf_eval_batch_directions(cf_model_id model, const double *params, size
   cf_prepared prep;
   impl->prepare(params, &prep);
   const size_t row = 3 * (size_t)cf_model_info_get(model)->dim;
-  for (size_t i = 0; i < count; ++i) {
-    cf_geometry g = cf_geometry_from_directions(n + 3 * i, l + 3 * i, v + 3 * i);
-    eval_one(impl, &prep, &g, row, f + 3 * i, grad ? grad + row * i : NULL);
+  if (!impl->batch) {
+    for (size_t i = 0; i < count; ++i) {
+      cf_geometry g = cf_geometry_from_directions(n + 3 * i, l + 3 * i, v + 3 * i);
+      eval_one(impl, &prep, &g, row, f + 3 * i, grad ? grad + row * i : NULL);
+    }
+    return CF_OK;
+  }
+  /* a model with a batch path gets the geometry in chunks, so that every
+   * entry point gives an observation the same result */
+  enum { CHUNK = 64 };
+  cf_geometry chunk[CHUNK];
+  for (size_t first = 0; first < count; first += CHUNK) {
+    size_t m = count - first < CHUNK ? count - first : CHUNK;
+    for (size_t i = 0; i < m; ++i) {
+      size_t k = 3 * (first + i);
+      chunk[i] = cf_geometry_from_directions(n + k, l + k, v + k);
+    }
+    double *g0 = grad ? grad + row * first : NULL;
+    if (impl->batch(&prep, m, chunk, f + 3 * first, g0)) continue;
+    for (size_t i = 0; i < m; ++i)
+      eval_one(impl, &prep, &chunk[i], row, f + 3 * (first + i), g0 ? g0 + row * i : NULL);
   }
   return CF_OK;
 }

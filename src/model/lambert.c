@@ -20,4 +20,4 @@ static void lambert_value_grad(const cf_prepared *prep, const cf_geometry *g, do
   for (int c = 0; c < 3; ++c) grad[c * DIM + CF_LAMBERT_ALBEDO + c] = CF_INV_PI;
 }
 
-const cf_model_impl cf_lambert_impl = {lambert_prepare, lambert_value, lambert_value_grad};
+const cf_model_impl cf_lambert_impl = {lambert_prepare, lambert_value, lambert_value_grad, NULL};

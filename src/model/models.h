@@ -32,8 +32,9 @@ typedef struct cf_clearcoat_prep {
 /* M4: everything that depends on the parameters only. Derivatives with
  * respect to the film's F0_1 are prefixed d_ (∂/∂F0_1). */
 typedef struct cf_clay_prep {
-  cf_std_tail tail_1, tail_2; /* M4T: both lobes STD's, one tail, one table */
+  cf_std_tail tail[2]; /* M4T: film and base STD's, one tail, one table */
   cf_std_table table;
+  int vector; /* M4T's lobes as vectors over blocks (clay.c) */
   double rho[3];
   cf_oren_nayar_coeffs on;
   cf_fresnel_eta eta_1; /* top interface: η1² − 1 from F0_1 */
@@ -70,6 +71,11 @@ typedef struct cf_model_impl {
   void (*prepare)(const double *params, cf_prepared *prep);
   void (*value)(const cf_prepared *prep, const cf_geometry *g, double f[3]);
   void (*value_grad)(const cf_prepared *prep, const cf_geometry *g, double f[3], double *grad);
+  /* NULL, or the whole of cf_eval_batch after prepare (unlit observations
+   * included; M4T's lobes over blocks of observations, clay.c); returns 0
+   * where it declines (eval.c then goes per observation) */
+  int (*batch)(const cf_prepared *prep, size_t count, const cf_geometry *geometry, double *f,
+               double *grad);
 } cf_model_impl;
 
 extern const cf_model_impl cf_lambert_impl;

@@ -37,4 +37,4 @@ static void oren_nayar_value_grad(const cf_prepared *prep, const cf_geometry *g,
 }
 
 const cf_model_impl cf_oren_nayar_impl = {oren_nayar_prepare, oren_nayar_value,
-                                          oren_nayar_value_grad};
+                                          oren_nayar_value_grad, NULL};

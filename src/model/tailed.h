@@ -408,6 +408,41 @@ cf_std_dv cf_std_dv_eval(const cf_std_tail *t, const cf_std_table *tb, double si
 cf_std_dv cf_ggx_dv_eval(double a2, double sin2_h, double cos2_h, double c_i, double c_o,
                          int with_grad);
 
+/* ---- The lobe over a block (tailed_block.c; docs/model.md §2.8, "Cost"):
+ * std_dv of CF_STD_BLOCK observations at once, for M4T's batches
+ * (cf_eval_batch). In the general regime, on a processor with AVX2 and
+ * FMA, the four lanes of a vector, with the exp and log1p of
+ * tailed_block.c (within 1 ulp of libm's); each entry within 1e-14 of
+ * std_dv's relative to its scale times 1 + γ + |γ ln r| (test_tailed_lobe
+ * block); elsewhere std_dv lane by lane. A lane's result does not depend
+ * on the other lanes. */
+enum { CF_STD_BLOCK = 4 };
+
+typedef struct cf_std_dv_block {
+  double value[CF_STD_BLOCK], d_a2[CF_STD_BLOCK], d_gamma[CF_STD_BLOCK];
+  double d_sin2[CF_STD_BLOCK], d_ci[CF_STD_BLOCK], d_co[CF_STD_BLOCK];
+} cf_std_dv_block;
+
+/* 1 where the vector path runs (x86-64 with AVX2 and FMA). */
+int cf_std_block_vector(void);
+
+/* A lobe's inputs over a block. */
+typedef struct cf_std_block_in {
+  double sin2[CF_STD_BLOCK], cos2[CF_STD_BLOCK], c_i[CF_STD_BLOCK], c_o[CF_STD_BLOCK];
+} cf_std_block_in;
+
+/* `lobes` (1 or 2) lobes over a block: t, in and out hold one entry a
+ * lobe, tb the table of their one tail (two lobes in one call overlap:
+ * M4T's film and base). vector: cf_std_block_vector()'s answer, asked
+ * once per prepare (0 forces std_dv lane by lane: the tests' reference). */
+void cf_std_dv_block_eval(const cf_std_tail *t, const cf_std_table *tb, int vector, int lobes,
+                          const cf_std_block_in *in, int with_grad, cf_std_dv_block *out);
+
+/* The vector path's exp (of y <= 0) and log1p (of x >= 0), for their test;
+ * libm's where cf_std_block_vector() is 0. */
+void cf_std_block_exp(const double y[CF_STD_BLOCK], double out[CF_STD_BLOCK]);
+void cf_std_block_log1p(const double x[CF_STD_BLOCK], double out[CF_STD_BLOCK]);
+
 /* ---- Special functions (libm only), exposed for their tests. */
 
 /* ln(Γ(a + 1/2) / Γ(a + 1)) for a > −1/2, and its derivative

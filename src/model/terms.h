@@ -17,8 +17,10 @@
  * callers, so that the value-only path drops the derivative work. */
 #if defined(__GNUC__)
 #define CF_ALWAYS_INLINE static inline __attribute__((always_inline))
+#define CF_FLATTEN __attribute__((flatten)) /* every call inside inlined */
 #else
 #define CF_ALWAYS_INLINE static inline
+#define CF_FLATTEN
 #endif
 
 /* In a 3 × dim gradient, zero the entries of the RGB parameter at `slot`
