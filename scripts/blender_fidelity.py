@@ -5,7 +5,10 @@ the same scene, pixel by pixel inside the sphere.
 
 usage: blender_fidelity.py CLAYFIT WORKDIR FIT.json [FIT.json ...]
            [--size WxH] [--samples S] [--supersample S] [--flash-offset x,y,z]
-           [--set INPUT=VALUE ...] [--max-rmse X] [--blender BLENDER]
+           [--set INPUT=VALUE ...] [--max-rmse X] [--blender BLENDER] [--seed N]
+           [--environment EXR [--environment-lights K] [--environment-rotation R]
+            [--interpolation Closest|Linear] [--rotation R] [--orientation DEG]]
+           [--diffuse-only] [--synth-cache DIR]
 
 For each fit (named by its folder): `clayfit export --format blender`,
 `clayfit synth` of one noiseless float image of the fit's model and values
@@ -15,6 +18,13 @@ view at the sphere), scripts/blender_render.py, scripts/blender_compare.py.
 Prints one JSON line per fit and a Markdown row; WORKDIR/NAME/diff.png is the
 difference image. With --max-rmse, exits 1 when a relative RMSE is above it.
 Exit 77 when Blender is not installed.
+
+With --environment (the HDRI rows), the flash is replaced by the map: K
+median-cut lights in clayfit (synth --environment, default K 1024), the world's
+Environment Texture in Cycles, oriented by truth.json's rotation
+(blender_render.py). --orientation DEG is the one-patch map check
+(scene_compare.orientation) instead of the comparison. --diffuse-only renders a
+Diffuse BSDF of the fit's albedo instead of the preset (the floor).
 """
 import argparse
 import json
@@ -40,15 +50,31 @@ def one(a, fit_path):
     run([a.clayfit, "--quiet", "export", fit_path, "--format", "blender", "-o", preset], "export")
     synth = os.path.join(work, "synth")
     t0 = time.monotonic()
-    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG)
+    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG,
+                 sc.environment_options(a.environment, a.environment_lights,
+                                        a.environment_rotation) if a.environment else None,
+                 a.synth_cache)
     t1 = time.monotonic()
     render = os.path.join(work, "blender.exr")
-    sets = [x for s in a.set for x in ("--set", s)]
+    extra = [x for s in a.set for x in ("--set", s)]
+    if a.diffuse_only:
+        albedo = fit["params"]["albedo"]["value"]
+        extra += ["--diffuse-only", *(repr(float(v)) for v in albedo)]
+    if a.rotation:
+        extra += ["--rotation", a.rotation]
     blender = [a.blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P"]
     run(blender + [os.path.join(HERE, "blender_render.py"), "--", "--capture", synth,
-                   "--preset", preset, "--out", render, "--samples", str(a.samples), *sets],
+                   "--preset", preset, "--out", render, "--samples", str(a.samples),
+                   "--seed", str(a.seed), "--interpolation", a.interpolation, *extra],
         "blender_render.py")
     t2 = time.monotonic()
+    if a.orientation is not None:
+        w, h = map(int, a.size.split("x"))
+        c = sc.exr_values(os.path.join(synth, "images", "000.exr"), 3, PROG)
+        m = sc.exr_values(os.path.join(synth, "masks", "000.exr"), 1, PROG)
+        b = sc.exr_values(render, 3, PROG)
+        return sc.report_orientation(name, "Blender", c, b, m, synth, w, h, 3, a.orientation,
+                                     PROG)
     out = run(blender + [os.path.join(HERE, "blender_compare.py"), "--", "--clayfit",
                          os.path.join(synth, "images", "000.exr"), "--mask",
                          os.path.join(synth, "masks", "000.exr"), "--render", render,
@@ -71,6 +97,21 @@ def main():
     p.add_argument("--flash-offset", default="2.5,-1.5,0")
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--max-rmse", type=float)
+    p.add_argument("--seed", type=int, default=1, help="Cycles' seed")
+    p.add_argument("--environment", help="an equirectangular EXR: the map's median-cut lights "
+                                         "in clayfit, the world's texture in Cycles")
+    p.add_argument("--environment-lights", type=int, default=1024)
+    p.add_argument("--environment-rotation", help="synth's --environment-rotation")
+    p.add_argument("--synth-cache", help="a folder keeping each clayfit synth, reused by a "
+                                         "later run of the same command")
+    p.add_argument("--interpolation", default="Closest", choices=["Closest", "Linear"])
+    p.add_argument("--rotation", help="9 numbers (rows): Blender's map rotation instead of "
+                                      "truth.json's (to show a wrong one fails)")
+    p.add_argument("--diffuse-only", action="store_true",
+                   help="a Lambert material of the fit's albedo instead of the preset")
+    p.add_argument("--orientation", type=float, metavar="DEGREES",
+                   help="instead of the comparison, the orientation check of a Lambert sphere "
+                        "under a one-patch map: both images lit from the patch within DEGREES")
     p.add_argument("--blender", default=shutil.which("blender"))
     a = p.parse_args()
     if not a.blender:
@@ -80,6 +121,9 @@ def main():
     failed = False
     for fit in a.fits:
         r = one(a, fit)
+        if isinstance(r, bool):  # the orientation check's verdict
+            failed = r or failed
+            continue
         failed = sc.report(r, a.max_rmse) or failed
     return 1 if failed else 0
 

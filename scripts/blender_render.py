@@ -4,6 +4,7 @@ material preset `clayfit export --format blender` wrote (docs/fidelity.md).
 usage: blender -b --factory-startup --python-exit-code 1 -P scripts/blender_render.py -- \
            --capture DIR --preset PRESET.py --out OUT.exr [--image N] [--samples S]
            [--set INPUT=VALUE ...] [--seed N] [--diffuse-only R G B]
+           [--interpolation Closest|Linear] [--rotation R00,R01,...,R22]
 
 The scene is the capture's, read from its files, not restated here: the
 sphere (truth.json: centre, radius), camera N (sparse/0/cameras.txt and
@@ -19,6 +20,17 @@ image formation has no inter-reflection (docs/model.md §5.1). The pixel is a
 box of 1 px (clayfit synth averages S x S samples over the pixel's square).
 Linear float OpenEXR, view transform Standard, exposure 0, gamma 1, no
 denoising (Debian's build has no OpenImageDenoise).
+
+Under a map (truth.json's "environment": synth --environment), the flash is
+replaced by a world of that map (docs/fidelity.md, "HDRI rows"): an Environment
+Texture whose vector is C R^T D for the ray direction D, with R the capture's
+rotation (map frame to world) and C scene_compare.CYCLES_FROM_MAP (Cycles'
+equirectangular frame against clayfit's, a rotation), so each direction sees the
+texel clayfit's lights came from, its negative values (a lossy EXR's ringing)
+counted as 0 as clayfit counts them. Interpolation Closest (default: clayfit
+holds a texel's radiance constant over its solid angle), world importance
+sampling at the map's own resolution. --rotation replaces the capture's
+rotation (9 numbers, rows): to show the orientation check fails on a wrong one.
 
 --diffuse-only replaces the preset with a Diffuse BSDF of the fit's albedo
 (Lambert in Cycles at roughness 0), which tests the scene, units and pixel
@@ -52,6 +64,10 @@ def parse_args():
     p.add_argument("--seed", type=int, default=1, help="Cycles' seed")
     p.add_argument("--diffuse-only", type=float, nargs=3, metavar=("R", "G", "B"),
                    help="a Lambert material of this albedo instead of the preset")
+    p.add_argument("--interpolation", default="Closest", choices=["Closest", "Linear"],
+                   help="the environment texture's (under a map; default Closest)")
+    p.add_argument("--rotation", help="9 numbers (rows): the map's rotation instead of "
+                                      "truth.json's")
     a = p.parse_args(argv)
     if not a.preset and not a.diffuse_only:
         p.error("--preset or --diffuse-only is needed")
@@ -157,6 +173,46 @@ def set_render(scene, args):
     scene.render.threads_mode = "AUTO"
 
 
+def environment_world(scene, env, interpolation, rotation_text):
+    """The world of the capture's map: Background (strength 1) of an
+    Environment Texture looked up at M D, M = CYCLES_FROM_MAP R^T (three dot
+    products, so that --rotation can also hand it a mirror, which must fail)."""
+    rotation = env["rotation"]
+    if rotation_text:
+        v = [float(x) for x in rotation_text.split(",")]
+        rotation = [v[0:3], v[3:6], v[6:9]]
+    m = sc.matmul(sc.CYCLES_FROM_MAP, sc.transpose(rotation))
+    world = bpy.data.worlds.new("environment")
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    coords = nodes.new("ShaderNodeTexCoord")
+    combine = nodes.new("ShaderNodeCombineXYZ")
+    for i, axis in enumerate("XYZ"):
+        dot = nodes.new("ShaderNodeVectorMath")
+        dot.operation = "DOT_PRODUCT"
+        dot.inputs[1].default_value = m[i]
+        links.new(coords.outputs["Generated"], dot.inputs[0])
+        links.new(dot.outputs["Value"], combine.inputs[axis])
+    texture = nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(os.path.abspath(env["path"]), check_existing=False)
+    texture.image.colorspace_settings.name = "Non-Color"  # linear radiance, untouched
+    texture.interpolation = interpolation
+    texture.projection = "EQUIRECTANGULAR"
+    links.new(combine.outputs["Vector"], texture.inputs["Vector"])
+    # negative values count as 0, as in clayfit (envmap.h): studio.exr's DWA coding leaves
+    # 2028 of them around its sources, -0.54 % of its total, 0.58 % of the Lambert sphere
+    clamp = nodes.new("ShaderNodeVectorMath")
+    clamp.operation = "MAXIMUM"
+    clamp.inputs[1].default_value = (0.0, 0.0, 0.0)
+    links.new(texture.outputs["Color"], clamp.inputs[0])
+    background = nodes["Background"]
+    background.inputs["Strength"].default_value = 1.0
+    links.new(clamp.outputs["Vector"], background.inputs["Color"])
+    world.cycles.sampling_method = "MANUAL"  # importance sampled at the map's resolution
+    world.cycles.sample_map_resolution = texture.image.size[0]
+    scene.world = world
+
+
 def main():
     args = parse_args()
     with open(os.path.join(args.capture, "truth.json"), encoding="utf-8") as f:
@@ -165,10 +221,14 @@ def main():
     bc.clear_scene()
     scene = bpy.context.scene
     r, centre = add_camera(scene, pose, camera)
-    add_flash(scene, *sc.flash(args.capture, {"r": r, "centre": centre}))
+    env = sc.truth_environment(args.capture)
+    if not env:
+        add_flash(scene, *sc.flash(args.capture, {"r": r, "centre": centre}))
     bc.add_exact_sphere(scene, truth["sphere"]["center"], truth["sphere"]["radius"],
                         make_material(args))
     set_render(scene, args)
+    if env:
+        environment_world(scene, env, args.interpolation, args.rotation)
     scene.render.filepath = os.path.abspath(args.out)
     bpy.ops.render.render(write_still=True)
     if not os.path.exists(scene.render.filepath):

@@ -302,8 +302,8 @@ def main():
                   {"type": "hdri", "file": os.path.abspath(args.hdri),
                    "strength": args.hdri_strength,
                    # Cycles: u = (atan2(y, x) - pi) / (-2 pi), v = 1 - acos(z) / pi (v up):
-                   # the map's direction (clayfit, envmap.c) m = (-x, z, -y)
-                   "map_to_world": [[-1, 0, 0], [0, 0, -1], [0, 1, 0]]}),
+                   # the map's direction (clayfit, envmap.h) m = (x, z, -y)
+                   "map_to_world": [[1, 0, 0], [0, 0, -1], [0, 1, 0]]}),
         "camera": {"model": "PINHOLE", "width": args.width, "height": args.height,
                    "params": [f, f, args.width / 2, args.height / 2]},
         "views": views,

@@ -8,6 +8,7 @@ Plain Python 3, no numpy: blender_compare.py imports it in Blender's Python
 (whose site-packages may have none); the others from system python3. Each
 caller puts this folder on sys.path.
 """
+import hashlib
 import json
 import math
 import os
@@ -48,13 +49,198 @@ def fit_folder(workdir, fit_path):
         return name, work, json.load(f)
 
 
-def synth_fit(clayfit, fit, folder, size, supersample, flash_offset, prog):
+def synth_fit(clayfit, fit, folder, size, supersample, flash_offset, prog, environment=None,
+              cache=None):
     """The fidelity scene: one noiseless float image of the fit's model and
-    values with its mask (camera 0: distance 5, 20 degrees up)."""
-    run([clayfit, "--quiet", "synth", "-o", folder, "--model", fit["model"]["code"],
-         *synth_params(fit), "--images", "1", "--size", size, "--format", "exr",
-         "--no-noise", "--masks", "--supersample", str(supersample),
-         "--flash-offset", flash_offset], "clayfit synth", prog)
+    values with its mask (camera 0: distance 5, 20 degrees up), lit by the
+    flash or, with `environment` (synth's --environment options as a list),
+    by a map's median-cut lights instead. With `cache` (a folder), a synth
+    of the same command is copied from there (K = 1024 median-cut lights
+    cost minutes for the tailed rungs; Blender's and three.js' rows share them)."""
+    light = environment if environment else ["--flash-offset", flash_offset]
+    args = ["--model", fit["model"]["code"], *synth_params(fit), "--images", "1", "--size", size,
+            "--format", "exr", "--no-noise", "--masks", "--supersample", str(supersample), *light]
+    key = None
+    if cache:
+        stamp = os.stat(clayfit).st_mtime_ns
+        key = os.path.join(cache, hashlib.sha1(json.dumps([clayfit, stamp, args]).encode())
+                           .hexdigest())
+        if os.path.isdir(key):
+            shutil.rmtree(folder, ignore_errors=True)
+            shutil.copytree(key, folder)
+            return
+    run([clayfit, "--quiet", "synth", "-o", folder, *args], "clayfit synth", prog)
+    if key:
+        # the map's path in truth.json is relative to the folder: absolute in the copy
+        truth_path = os.path.join(folder, "truth.json")
+        truth = json.load(open(truth_path))
+        if truth.get("environment"):
+            truth["environment"]["file"] = os.path.abspath(
+                os.path.join(folder, truth["environment"]["file"]))
+        shutil.copytree(folder, key + ".tmp", dirs_exist_ok=True)
+        with open(os.path.join(key + ".tmp", "truth.json"), "w") as f:
+            json.dump(truth, f, indent=1)
+        os.replace(key + ".tmp", key)
+
+
+def environment_options(path, lights, rotation):
+    """synth's --environment options (rotation: None for synth's default, or
+    its --environment-rotation text)."""
+    out = ["--environment", os.path.abspath(path), "--environment-lights", str(lights)]
+    return out + (["--environment-rotation", rotation] if rotation else [])
+
+
+# --- the environment map's frame ----------------------------------------------
+
+def map_direction(width, height, x, y):
+    """clayfit's equirectangular convention (src/capture/envmap.h), map frame
+    y up: the direction of pixel (x, y) (column, row from the top; centres
+    at integer + 0.5 are x + 0.5 here)."""
+    theta = math.pi * (y + 0.5) / height
+    phi = 2.0 * math.pi * (x + 0.5) / width
+    return [-math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi)]
+
+
+def map_pixel(width, height, d):
+    """The inverse of map_direction: (x, y) of a unit map-frame direction."""
+    theta = math.acos(max(-1.0, min(1.0, d[1])))
+    phi = math.atan2(-d[2], -d[0]) % (2.0 * math.pi)
+    return phi / (2.0 * math.pi) * width - 0.5, theta / math.pi * height - 0.5
+
+
+# Cycles' equirectangular lookup (intern/cycles/util/math_... direction_to_equirectangular,
+# range (-2 pi, pi, -pi, pi)): u = 1/2 - atan2(D.y, D.x)/(2 pi), v = 1 - acos(D.z)/pi with v
+# up from the bottom row. With clayfit's theta = pi (1 - v) and phi = 2 pi u, Cycles' D
+# reads the texel of map direction d where D = (d.x, -d.z, d.y): this rotation (synth's
+# default, the map's up to Blender's +z).
+CYCLES_FROM_MAP = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
+
+
+# three.js' equirectangular lookup (equirectUv in common.glsl, the map's rows bottom first as
+# EXRLoader stores them): u = atan2(e.z, e.x)/(2 pi) + 1/2, v = asin(e.y)/pi + 1/2 for the
+# direction e in the environment's frame: clayfit's own (src/capture/envmap.h), e = d.
+THREE_FROM_MAP = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+
+
+def matmul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def transpose(a):
+    return [[a[j][i] for j in range(3)] for i in range(3)]
+
+
+def truth_environment(folder):
+    """truth.json's environment (synth --environment; data_schema/truth.schema.json): the
+    map's path, its light count K and the rotation (3 x 3 rows, map frame to world);
+    None for a flash capture."""
+    truth = json.load(open(os.path.join(folder, "truth.json")))
+    env = truth.get("environment")
+    if not env:
+        return None
+    rot = env["rotation"]
+    return {"path": os.path.join(folder, env["file"]), "lights": env["count"],
+            "rotation": [rot[0:3], rot[3:6], rot[6:9]]}
+
+
+def lambert_light_direction(values, coverage, camera, w, h, stride):
+    """The direction of the one light that best explains a Lambert sphere
+    (unit, at the origin): over the lit pixels (above 5 % of the peak; the
+    mask covers them fully) the value is n . g with n the pixel centre's
+    normal, g = rho E l; least squares for g, returned normalised. Any
+    renderer's image gives it, noise and all: the orientation check."""
+    r, c = camera["r"], camera["centre"]
+    lum = [sum(values[stride * i + k] for k in range(3)) / 3.0 for i in range(w * h)]
+    peak = max(lum[i] for i in range(w * h) if coverage[i] >= 1.0 - 1e-6)
+    a = [[0.0] * 3 for _ in range(3)]
+    rhs = [0.0] * 3
+    for i in range(w * h):
+        if coverage[i] < 1.0 - 1e-6 or lum[i] < 0.05 * peak:
+            continue
+        xc = ((i % w) + 0.5 - camera["cx"]) / camera["fx"]
+        yc = ((i // w) + 0.5 - camera["cy"]) / camera["fy"]
+        ray = [r[0][j] * xc + r[1][j] * yc + r[2][j] for j in range(3)]
+        norm = math.sqrt(sum(v * v for v in ray))
+        ray = [v / norm for v in ray]
+        b = sum(ray[j] * c[j] for j in range(3))
+        disc = b * b - (sum(v * v for v in c) - 1.0)
+        if disc <= 0.0:
+            continue
+        t = -b - math.sqrt(disc)
+        n = [c[j] + t * ray[j] for j in range(3)]
+        for p in range(3):
+            rhs[p] += n[p] * lum[i]
+            for q in range(3):
+                a[p][q] += n[p] * n[q]
+    g = solve3(a, rhs)
+    norm = math.sqrt(sum(v * v for v in g))
+    return [v / norm for v in g]
+
+
+def map_mean_direction(path, prog):
+    """The map's energy-weighted mean direction in its own frame (the
+    direction of median cut's K = 1 light): sum of luminance dw d."""
+    info = run(["oiiotool", "--info", path], "oiiotool --info", prog)
+    m = re.search(r"(\d+) x\s+(\d+)", info)
+    width, height = int(m.group(1)), int(m.group(2))
+    values = exr_values(path, 3, prog)
+    g = [0.0, 0.0, 0.0]
+    for y in range(height):
+        weight = math.sin(math.pi * (y + 0.5) / height)
+        for x in range(width):
+            i = 3 * (y * width + x)
+            lum = 0.2126 * values[i] + 0.7152 * values[i + 1] + 0.0722 * values[i + 2]
+            d = map_direction(width, height, x, y)
+            for k in range(3):
+                g[k] += lum * weight * d[k]
+    norm = math.sqrt(sum(v * v for v in g))
+    return [v / norm for v in g]
+
+
+def orientation(values, coverage, folder, w, h, stride, prog):
+    """The orientation check of a Lambert sphere lit by a map with one bright
+    patch (docs/fidelity.md, "HDRI rows"): the angle in degrees between the
+    light direction the image shows (lambert_light_direction) and where
+    truth.json's rotation puts the patch in the world; also both directions."""
+    env = truth_environment(folder)
+    d = map_mean_direction(env["path"], prog)
+    rot = env["rotation"]
+    expected = [sum(rot[i][k] * d[k] for k in range(3)) for i in range(3)]
+    seen = lambert_light_direction(values, coverage, colmap_camera(folder), w, h, stride)
+    dot = max(-1.0, min(1.0, sum(seen[k] * expected[k] for k in range(3))))
+    return math.degrees(math.acos(dot)), seen, expected
+
+
+def report_orientation(name, renderer, c, b, coverage, folder, w, h, stride, max_deg, prog):
+    """The orientation check of clayfit's image c and the renderer's b: one
+    JSON line each; True (and a FAIL line) when either is off by more than
+    max_deg."""
+    failed = False
+    for who, values in (("clayfit", c), (renderer, b)):
+        angle, seen, expected = orientation(values, coverage, folder, w, h, stride, prog)
+        print(json.dumps({"fit": name, "image": who, "orientation_error_deg": angle,
+                          "light_seen": seen, "light_expected": expected}))
+        if not angle <= max_deg:
+            print(f"FAIL: orientation: {who}'s sphere is lit from {angle:.1f} degrees off the "
+                  f"map's bright patch (limit {max_deg:g})")
+            failed = True
+    return failed
+
+
+def solve3(a, b):
+    """a x = b for a 3 x 3 system (Cramer's rule; a is a normal matrix here)."""
+    def det(m):
+        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+    d = det(a)
+    out = []
+    for k in range(3):
+        m = [row[:] for row in a]
+        for i in range(3):
+            m[i][k] = b[i]
+        out.append(det(m) / d)
+    return out
 
 
 def _records(path):

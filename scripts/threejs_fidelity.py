@@ -7,6 +7,8 @@ formation of the same scene, pixel by pixel inside the sphere.
 usage: threejs_fidelity.py CLAYFIT NODE_MODULES WORKDIR FIT.json [FIT.json ...]
            [--size WxH] [--supersample S] [--flash-offset x,y,z]
            [--set PROPERTY=VALUE ...] [--max-rmse X]
+           [--environment EXR [--environment-lights K] [--environment-rotation R]
+            [--rotation R] [--orientation DEG]] [--synth-cache DIR]
 
 The scene is blender_fidelity.py's: `clayfit synth` of one noiseless float
 image of the fit's model and values (camera 0: distance 5, 20 degrees up; the
@@ -23,6 +25,12 @@ sum ratio, the RMSE after the best gain and the difference image
 (WORKDIR/NAME/diff.png) are blender_compare.py's (scripts/scene_compare.py). Prints one JSON line and a
 Markdown row per fit. With --max-rmse, exits 1 when a relative RMSE is above
 it. Exit 77 without Chromium, oiiotool, or three and esbuild in NODE_MODULES.
+
+With --environment (the HDRI rows), the flash is replaced by the map: K
+median-cut lights in clayfit (synth --environment, default K 1024),
+scene.environment in three.js (EXRLoader, negative values as 0, PMREM as three.js makes it; scene.environmentRotation from
+truth.json's rotation: scene_compare.THREE_FROM_MAP). --orientation DEG is the
+one-patch map check instead of the comparison.
 """
 import argparse
 import base64
@@ -41,6 +49,7 @@ PROG = "threejs_fidelity"
 PAGE_SCRIPT = r"""
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 const jobs = %(jobs)s;
 const out = document.getElementById('out');
 
@@ -52,18 +61,51 @@ function setProperty(material, key, text) {
   material.needsUpdate = true;
 }
 
+// the map of job.environment as scene.environment: EXRLoader's float data (three.js'
+// equirectangular convention is clayfit's, scene_compare.THREE_FROM_MAP) with its
+// negative values as 0 (as clayfit counts them, src/capture/envmap.h),
+// equirectangular, turned by scene.environmentRotation so that the world's rotation is
+// job.environment.rotation (WebGLMaterials uses the transpose of the Euler's matrix)
+function setEnvironment(world, env) {
+  const raw = Uint8Array.from(atob(env.exr), (ch) => ch.charCodeAt(0));
+  const loader = new EXRLoader();
+  loader.setDataType(THREE.FloatType);
+  const map = loader.parse(raw.buffer);
+  const data = map.data;
+  for (let i = 0; i < data.length; ++i) if (!(data[i] > 0)) data[i] = 0;
+  const texture = new THREE.DataTexture(data, map.width, map.height, map.format, map.type);
+  texture.colorSpace = THREE.LinearSRGBColorSpace;
+  texture.minFilter = texture.magFilter = THREE.LinearFilter;
+  texture.generateMipmaps = false;
+  texture.flipY = false;
+  texture.mapping = THREE.EquirectangularReflectionMapping;
+  texture.needsUpdate = true;
+  world.environment = texture;
+  const r = env.rotation, m = new THREE.Matrix4().set(r[0][0], r[0][1], r[0][2], 0,
+    r[1][0], r[1][1], r[1][2], 0, r[2][0], r[2][1], r[2][2], 0, 0, 0, 0, 1);
+  world.environmentRotation.setFromRotationMatrix(m, 'XYZ');
+  world.environmentIntensity = 1;
+  return texture;
+}
+
 function render(renderer, job, material) {
   const S = job.supersample, W = job.width * S, H = job.height * S;
   const target = floatTarget(THREE, W, H);
   const cam = colmapCamera(THREE, job.camera, W, H, S);
   const world = new THREE.Scene();
   world.add(new THREE.Mesh(new THREE.SphereGeometry(1, 512, 256), material));
-  // candela: E = I / d^2 at decay 2 and distance 0 (no cutoff window)
-  const light = new THREE.PointLight(0xffffff, job.intensity, 0, 2);
-  light.position.set(job.light[0], job.light[1], job.light[2]);
-  world.add(light);
+  let texture = null;
+  if (job.environment) {
+    texture = setEnvironment(world, job.environment);
+  } else {
+    // candela: E = I / d^2 at decay 2 and distance 0 (no cutoff window)
+    const light = new THREE.PointLight(0xffffff, job.intensity, 0, 2);
+    light.position.set(job.light[0], job.light[1], job.light[2]);
+    world.add(light);
+  }
   const pixels = renderFloat(THREE, renderer, target, world, cam, W, H);
   target.dispose();
+  if (texture) texture.dispose();
   // average S x S blocks; rows top first (GL's start at the bottom); RGB
   const w = job.width, h = job.height, res = new Float32Array(w * h * 3);
   for (let y = 0; y < h; ++y) for (let x = 0; x < w; ++x) for (let ch = 0; ch < 3; ++ch) {
@@ -106,14 +148,27 @@ def prepare(a, fit_path):
            PROG)
     synth = os.path.join(work, "synth")
     t0 = time.monotonic()
-    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG)
+    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG,
+                 sc.environment_options(a.environment, a.environment_lights,
+                                        a.environment_rotation) if a.environment else None,
+                 a.synth_cache)
     synth_s = time.monotonic() - t0
     camera = sc.colmap_camera(synth)
-    light, intensity = sc.flash(synth, camera)
     w, h = map(int, a.size.split("x"))
     job = {"name": name, "gltf": open(gltf, encoding="utf-8").read(), "width": w, "height": h,
-           "supersample": a.supersample, "camera": camera, "light": light,
-           "intensity": intensity, "set": [s.split("=", 1) for s in a.set]}
+           "supersample": a.supersample, "camera": camera,
+           "set": [s.split("=", 1) for s in a.set]}
+    env = sc.truth_environment(synth)
+    if env:
+        rotation = env["rotation"]
+        if a.rotation:
+            v = [float(x) for x in a.rotation.split(",")]
+            rotation = [v[0:3], v[3:6], v[6:9]]
+        with open(env["path"], "rb") as f:
+            exr = base64.b64encode(f.read()).decode("ascii")
+        job["environment"] = {"exr": exr, "rotation": sc.matmul(rotation, sc.THREE_FROM_MAP)}
+    else:
+        job["light"], job["intensity"] = sc.flash(synth, camera)
     return {"name": name, "model": fit["model"]["code"], "work": work, "synth": synth,
             "synth_s": synth_s}, job
 
@@ -130,6 +185,17 @@ def main():
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--margin", type=int, default=2)
     p.add_argument("--max-rmse", type=float)
+    p.add_argument("--environment", help="an equirectangular EXR: the map's median-cut lights "
+                                         "in clayfit, scene.environment in three.js")
+    p.add_argument("--environment-lights", type=int, default=1024)
+    p.add_argument("--environment-rotation", help="synth's --environment-rotation")
+    p.add_argument("--synth-cache", help="a folder keeping each clayfit synth, reused by a "
+                                         "later run of the same command")
+    p.add_argument("--rotation", help="9 numbers (rows): three.js' map rotation instead of "
+                                      "truth.json's (to show a wrong one fails)")
+    p.add_argument("--orientation", type=float, metavar="DEGREES",
+                   help="instead of the comparison, the orientation check of a Lambert sphere "
+                        "under a one-patch map: both images lit from the patch within DEGREES")
     a = p.parse_args()
     browser, skip = sc.chromium_skip(a.node_modules)
     if skip:
@@ -154,6 +220,10 @@ def main():
             raise SystemExit(f"threejs_fidelity: {case['name']}: the synth images are not {w}x{h}")
         raw = base64.b64decode(results[case["name"]]["pixels"])
         b = struct.unpack(f"<{3 * w * h}f", raw)
+        if a.orientation is not None:
+            failed = sc.report_orientation(case["name"], "three.js", c, b, m, case["synth"], w, h,
+                                           3, a.orientation, PROG) or failed
+            continue
         r, inside, mean = sc.compare(c, b, m, w, h, a.margin, 3, PROG)
         sc.write_png(os.path.join(case["work"], "diff.png"), w, h,
                      sc.diff_values(c, b, inside, w, h, mean, 3))

@@ -90,6 +90,15 @@ typedef void (*cf_progress_fn)(void *user, const char *stage, size_t done, size_
  * RGB are 28.8 GB; DiLiGenT's 96 images 0.36 GB. */
 #define CF_CAPTURE_MAX_IMAGE_BYTES 32000000000ULL
 
+/* Environment maps are reduced to directional lights by median cut: at
+ * most CF_ENVMAP_MAX_LIGHTS of them for a rendering (clayfit synth: a
+ * glossy M4 film under studio.exr is within 0.41 % of the map's exact
+ * integral at 16384 lights, 2.7 % at 4096), at most
+ * CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS in a capture file (its `count`): the
+ * fit keeps every light of every observation. */
+#define CF_ENVMAP_MAX_LIGHTS 65536
+#define CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS 4096
+
 typedef struct cf_capture_options {
   cf_progress_fn progress; /* may be NULL */
   void *progress_user;

@@ -35,6 +35,12 @@ typedef enum cf_synth_format {
  * true one times this factor: only the card can set the scale right. */
 #define CF_SYNTH_REFERENCE_FACTOR 0.37
 
+/* The default environment rotation, row-major: d_world = (x, -z, y) of
+ * d_map, a proper rotation (+90 degrees about x) taking the map's up (+y)
+ * to the world's (+z). */
+#define CF_SYNTH_ENVIRONMENT_ROTATION \
+  { 1, 0, 0, 0, 0, -1, 0, 1, 0 }
+
 typedef struct cf_synth_options {
   cf_model_id model;
   double params[CF_MAX_DIM]; /* the sphere's material, in range */
@@ -70,6 +76,16 @@ typedef struct cf_synth_options {
                               "relative", gives the flash's intensity times
                               CF_SYNTH_REFERENCE_FACTOR (wrong on purpose), and
                               names the card as its "reference" */
+  /* NULL: each camera's flash. Else an equirectangular map (linear RGB
+   * radiance, the capture format's `environment` convention) whose median
+   * cut into environment_lights (K in [1, 4096]) directional lights
+   * replaces the flash in every image (the sphere unshadowed, as the fit
+   * sees it; the ground and backdrop shadowed by the sphere). flash_* are
+   * then unused, reference_albedo must be 0. environment_rotation takes
+   * the map's frame (y up) to the world (z up), row-major, orthonormal. */
+  const char *environment;
+  int environment_lights;
+  double environment_rotation[9];
   cf_progress_fn progress; /* may be NULL */
   void *progress_user;
 } cf_synth_options;
@@ -77,7 +93,8 @@ typedef struct cf_synth_options {
 /* Defaults: M4 at its default parameters, 16 images of 640 x 480, focal
  * 1.2 x width, distance 5, flash 0.3 right and 0.3 up of the lens, read
  * noise 0.002, shot noise 0.0005, 3 x 3 samples, 8-bit PNG, seed 1, a 4 cm
- * sphere. */
+ * sphere; no environment, and for one 1024 lights and the rotation
+ * CF_SYNTH_ENVIRONMENT_ROTATION. */
 void cf_synth_default_options(cf_synth_options *options);
 
 /* Render into folder `dir` (created if missing): images/NNN.<ext>,

@@ -122,21 +122,11 @@ static cf_status per_image_lights(cf_capture *capture, const cf_light_spec *spec
 
 static cf_status environment_lights(cf_capture *capture, const cf_light_spec *spec_light,
                                     size_t slot, cf_error *err) {
-  cf_image map = {0};
-  cf_status s = cf_image_read(spec_light->file, &map, NULL, err);
-  if (s != CF_OK) return s;
-  if (map.channels < 3) {
-    cf_image_free(&map);
-    return cf_error_set(err, CF_EINVAL, "%s: an environment map needs RGB, it has %d channel%s",
-                        spec_light->file, map.channels, map.channels == 1 ? "" : "s");
-  }
   cf_directional_light *reduced = malloc((size_t)spec_light->count * sizeof *reduced);
   cf_envmap_report report = {0};
-  s = reduced ? cf_envmap_median_cut(&map, spec_light->rotation, spec_light->count, reduced,
-                                     &report, err)
-              : cf_error_set(err, CF_ENOMEM, "out of memory");
-  cf_image_free(&map);
-  if (s != CF_OK) cf_error_prefix(err, "%s", spec_light->file);
+  cf_status s = reduced ? cf_envmap_load(spec_light->file, spec_light->rotation, spec_light->count,
+                                         reduced, &report, err)
+                        : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK && report.clamped)
     capture_warn(capture, "%s: %zu negative or non-finite values clamped to 0", spec_light->file,
                  report.clamped);

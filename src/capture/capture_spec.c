@@ -5,12 +5,14 @@
 #include "capture_spec.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "clayfit/capture.h"
 #include "core/file.h"
 #include "core/json_reader.h"
+#include "envmap.h"
 
 enum {
   MAX_CAPTURE_FILE = 64 << 20, /* bytes */
@@ -444,20 +446,16 @@ static cf_status read_light(const json_t *item, const json_at *at, cf_capture_sp
                                 err)) != CF_OK ||
           (s = json_get_number(item, at, "scale", 0, 1e-300, 1e300, &light->scale, NULL, err)) !=
               CF_OK ||
-          (s = json_get_integer(item, at, "count", 0, 1, 4096, &count, NULL, err)) != CF_OK)
+          (s = json_get_integer(item, at, "count", 0, 1, CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS,
+                                &count, NULL, err)) != CF_OK)
         return s;
       light->count = (int)count;
-      /* the rotation must be orthonormal: RᵀR = I */
-      const double *r = light->rotation;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          double d = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
-          if (fabs(d - (i == j)) > 1e-6) {
-            json_at r_at = json_member_at(at, "rotation");
-            return json_fail(&r_at, err, CF_EPARSE, "not a rotation: column %d . column %d = %g", i,
-                             j, d);
-          }
-        }
+      if (cf_envmap_check_rotation(light->rotation, err) != CF_OK) {
+        json_at r_at = json_member_at(at, "rotation");
+        char why[sizeof err->message];
+        snprintf(why, sizeof why, "%s", err->message);
+        return json_fail(&r_at, err, CF_EPARSE, "%s", why);
+      }
       json_at f_at = json_member_at(at, "file");
       return resolve(spec->dir, file, &f_at, &light->file, err);
     }

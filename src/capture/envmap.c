@@ -22,12 +22,12 @@
 #include "envmap.h"
 
 #define PI 3.14159265358979323846
-#define MAX_LIGHTS 4096
+#define MAX_LIGHTS CF_ENVMAP_MAX_LIGHTS
 
 void cf_envmap_direction(int width, int height, double x, double y, double d[3]) {
   const double theta = PI * (y + 0.5) / height;
   const double phi = 2.0 * PI * (x + 0.5) / width;
-  d[0] = sin(theta) * cos(phi);
+  d[0] = -sin(theta) * cos(phi);
   d[1] = cos(theta);
   d[2] = -sin(theta) * sin(phi);
 }
@@ -170,7 +170,7 @@ static void region_light(const geometry *g, const region *r, const double rotati
       const double e = luminance(rgb);
       for (int c = 0; c < 3; ++c) row_rgb[c] += rgb[c];
       row_energy += e;
-      row_mean[0] += e * g->cos_phi[x];
+      row_mean[0] -= e * g->cos_phi[x];
       row_mean[2] -= e * g->sin_phi[x];
     }
     for (int c = 0; c < 3; ++c) rgb_sum[c] += row_rgb[c] * d_omega;
@@ -197,21 +197,62 @@ static void region_light(const geometry *g, const region *r, const double rotati
   }
 }
 
-static cf_status check_rotation(const double rotation[9], cf_error *err) {
+cf_status cf_envmap_check_rotation(const double rotation[9], cf_error *err) {
+  const double *r = rotation;
   for (int i = 0; i < 9; ++i)
-    if (!isfinite(rotation[i]))
+    if (!isfinite(r[i]))
       return cf_error_set(err, CF_EINVAL, "environment map rotation: entry %d is not finite", i);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       double dot = 0.0;
-      for (int c = 0; c < 3; ++c) dot += rotation[3 * i + c] * rotation[3 * j + c];
+      for (int c = 0; c < 3; ++c) dot += r[3 * i + c] * r[3 * j + c];
       if (fabs(dot - (i == j ? 1.0 : 0.0)) > 1e-6)
         return cf_error_set(err, CF_EINVAL,
                             "environment map rotation is not orthonormal: rows %d and %d have "
                             "dot product %.9g",
                             i, j, dot);
     }
+  const double det = r[0] * (r[4] * r[8] - r[5] * r[7]) - r[1] * (r[3] * r[8] - r[5] * r[6]) +
+                     r[2] * (r[3] * r[7] - r[4] * r[6]);
+  if (det < 0.0)
+    return cf_error_set(err, CF_EINVAL,
+                        "environment map rotation has determinant %.9g: a mirror, not a rotation "
+                        "(the map is read as Blender and three.js read it, docs/captures.md; "
+                        "a mirror was needed only before 2026-11-27)",
+                        det);
   return CF_OK;
+}
+
+/* The queue of splittable regions, a binary max-heap of their indices:
+ * the largest energy first, the lower index among equals (the order of a
+ * linear search; k = 65536 would take 2^31 steps of it). */
+static int queue_before(const region *r, int a, int b) {
+  return r[a].energy > r[b].energy || (r[a].energy == r[b].energy && a < b);
+}
+
+static void queue_push(const region *r, int *heap, int *n, int index) {
+  if ((long long)(r[index].x1 - r[index].x0) * (r[index].y1 - r[index].y0) < 2) return;
+  int i = (*n)++;
+  while (i > 0 && queue_before(r, index, heap[(i - 1) / 2])) {
+    heap[i] = heap[(i - 1) / 2];
+    i = (i - 1) / 2;
+  }
+  heap[i] = index;
+}
+
+static int queue_pop(const region *r, int *heap, int *n) {
+  const int top = heap[0], last = heap[--(*n)];
+  int i = 0;
+  for (;;) {
+    int c = 2 * i + 1;
+    if (c >= *n) break;
+    if (c + 1 < *n && queue_before(r, heap[c + 1], heap[c])) ++c;
+    if (!queue_before(r, heap[c], last)) break;
+    heap[i] = heap[c];
+    i = c;
+  }
+  if (*n > 0) heap[i] = last;
+  return top;
 }
 
 cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], int k,
@@ -232,7 +273,7 @@ cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], in
                         "environment map: %d lights asked for from a map of only %d x %d pixels", k,
                         map->width, map->height);
   if (!rotation) rotation = identity;
-  cf_status status = check_rotation(rotation, err);
+  cf_status status = cf_envmap_check_rotation(rotation, err);
   if (status != CF_OK) return status;
 
   geometry g = {map->width, map->height, map->channels, map->pixels, 0, 0, 0, 0, 0, 0};
@@ -241,11 +282,13 @@ cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], in
   g.cos_phi = malloc(2 * w * sizeof(double));
   g.sat = malloc((w + 1) * (h + 1) * sizeof(double));
   region *regions = malloc((size_t)k * sizeof(region));
-  if (!g.sin_theta || !g.cos_phi || !g.sat || !regions) {
+  int *heap = malloc((size_t)k * sizeof(int));
+  if (!g.sin_theta || !g.cos_phi || !g.sat || !regions || !heap) {
     free(g.sin_theta);
     free(g.cos_phi);
     free(g.sat);
     free(regions);
+    free(heap);
     return cf_error_set(err, CF_ENOMEM, "environment map: out of memory for a %d x %d map",
                         map->width, map->height);
   }
@@ -259,15 +302,14 @@ cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], in
 
   regions[0] = (region){0, 0, map->width, map->height, 0.0};
   regions[0].energy = rect_energy(&g, 0, 0, map->width, map->height);
+  int queued = 0;
+  queue_push(regions, heap, &queued, 0);
   for (int n = 1; n < k; ++n) {
-    int next = -1; /* the splittable region of the largest energy */
-    for (int i = 0; i < n; ++i) {
-      const region *r = &regions[i];
-      if ((long long)(r->x1 - r->x0) * (r->y1 - r->y0) < 2) continue;
-      if (next < 0 || r->energy > regions[next].energy) next = i;
-    }
     /* k <= width × height, so some region still has two pixels */
+    const int next = queue_pop(regions, heap, &queued);
     split(&g, &regions[next], &regions[n]);
+    queue_push(regions, heap, &queued, next);
+    queue_push(regions, heap, &queued, n);
   }
   for (int i = 0; i < k; ++i) region_light(&g, &regions[i], rotation, &lights[i]);
 
@@ -275,5 +317,20 @@ cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], in
   free(g.cos_phi);
   free(g.sat);
   free(regions);
+  free(heap);
   return CF_OK;
+}
+
+cf_status cf_envmap_load(const char *path, const double rotation[9], int k,
+                         cf_directional_light *lights, cf_envmap_report *report, cf_error *err) {
+  cf_image map = {0};
+  cf_status s = cf_image_read(path, &map, NULL, err);
+  if (s != CF_OK) return s;
+  if (map.channels < 3)
+    s = cf_error_set(err, CF_EINVAL, "%s: an environment map needs RGB, it has %d channel%s", path,
+                     map.channels, map.channels == 1 ? "" : "s");
+  else if ((s = cf_envmap_median_cut(&map, rotation, k, lights, report, err)) != CF_OK)
+    cf_error_prefix(err, "%s", path);
+  cf_image_free(&map);
+  return s;
 }

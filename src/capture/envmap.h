@@ -7,6 +7,7 @@
 
 #include <stddef.h>
 
+#include "clayfit/capture.h" /* CF_ENVMAP_MAX_LIGHTS */
 #include "clayfit/image.h"
 #include "clayfit/status.h"
 
@@ -23,9 +24,13 @@ typedef struct cf_directional_light {
  * map have their centres at u = (x + 0.5)/W, v = (y + 0.5)/H, and
  *   θ = π v          (polar angle from +y: the top row looks up),
  *   φ = 2π u         (azimuth),
- *   d = (sin θ cos φ, cos θ, −sin θ sin φ).
+ *   d = (−sin θ cos φ, cos θ, −sin θ sin φ).
+ * This is three.js' frame and lookup (equirectUv): a panorama seen from
+ * inside, going right across the picture turns right (from −x at u = 0
+ * through −z at u = ¼; before 2026-11-27 d_x had the other sign, a mirror).
+ * Blender's world (z up) sees the same texel along (x, −z, y) of d.
  * A pixel subtends dω = (2π/W)(π/H) sin θ. The map's values are radiance.
- * `rotation` (row-major 3 × 3, orthonormal) takes map-frame directions to
+ * `rotation` (row-major 3 × 3, a proper rotation) takes map-frame directions to
  * the world frame: d_world = rotation · d_map. */
 void cf_envmap_direction(int width, int height, double x, double y, double d[3]);
 
@@ -34,8 +39,12 @@ typedef struct cf_envmap_report {
   double total[3]; /* Σ L dω over the map, per channel (irradiance units) */
 } cf_envmap_report;
 
+/* A map-to-world rotation, row-major: finite, orthonormal (to 1e-6) and
+ * proper (determinant +1; a mirror is refused, saying so). CF_EINVAL. */
+cf_status cf_envmap_check_rotation(const double rotation[9], cf_error *err);
+
 /* Reduce a linear-RGB equirectangular map (3 or 4 channels; a 4th is
- * ignored) to k directional lights, k in [1, 4096] and at most the map's
+ * ignored) to k directional lights, k in [1, CF_ENVMAP_MAX_LIGHTS] and at most the map's
  * pixel count. Regions are split at the median of their energy
  * (luminance·dω, BT.709 luminance 0.2126 R + 0.7152 G + 0.0722 B) along
  * their longer side (measured on the sphere: widths scaled by sin θ at
@@ -52,5 +61,11 @@ typedef struct cf_envmap_report {
 cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], int k,
                                cf_directional_light *lights, cf_envmap_report *report,
                                cf_error *err);
+
+/* The map at `path` (read by cf_image_read, RGB or RGBA) reduced by
+ * cf_envmap_median_cut: what a capture's `environment` light and
+ * `clayfit synth --environment` both use. Errors start with the path. */
+cf_status cf_envmap_load(const char *path, const double rotation[9], int k,
+                         cf_directional_light *lights, cf_envmap_report *report, cf_error *err);
 
 #endif /* CLAYFIT_CAPTURE_ENVMAP_H */

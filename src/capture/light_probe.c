@@ -184,9 +184,9 @@ void cf_probe_reflect(const double n[3], double d[3]) {
 }
 
 void cf_envmap_pixel(int width, int height, const double d[3], double *x, double *y) {
-  /* cf_envmap_direction: d = (sin θ cos φ, cos θ, −sin θ sin φ) */
+  /* cf_envmap_direction: d = (−sin θ cos φ, cos θ, −sin θ sin φ) */
   const double theta = acos(fmax(-1.0, fmin(1.0, d[1])));
-  double phi = atan2(-d[2], d[0]);
+  double phi = atan2(-d[2], -d[0]);
   if (phi < 0.0) phi += 2.0 * PI;
   *x = phi / (2.0 * PI) * width - 0.5;
   *y = theta / PI * height - 0.5;

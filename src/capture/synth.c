@@ -11,11 +11,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clayfit/capture.h"
 #include "clayfit/colmap.h"
 #include "clayfit/image.h"
 #include "core/file.h"
 #include "core/json_reader.h"
 #include "core/rng.h"
+#include "envmap.h"
 #include "synth_scene.h"
 
 #define SYNTH_PI 3.14159265358979323846
@@ -46,6 +48,9 @@ void cf_synth_default_options(cf_synth_options *o) {
   o->jpeg_quality = CF_SYNTH_JPEG_QUALITY;
   o->seed = 1;
   o->sphere_radius_m = 0.04;
+  o->environment_lights = 1024;
+  static const double rotation[9] = CF_SYNTH_ENVIRONMENT_ROTATION;
+  memcpy(o->environment_rotation, rotation, sizeof rotation);
 }
 
 /* ---- cameras ---- */
@@ -124,12 +129,17 @@ static cf_camera pinhole(const cf_synth_options *o) {
 
 /* ---- rendering ---- */
 
+enum { SYNTH_THREADS = 2 };
+
 typedef struct render_job {
   const cf_synth_options *options;
   const char *dir;
   cf_camera camera;
   synth_camera *cameras;
   double intensity;
+  cf_light *environment;       /* the map's lights (options->environment_lights), or NULL */
+  char environment_file[4096]; /* the map relative to the capture's folder */
+  cf_envmap_report environment_report;
   cf_response response;
   double *exposures;   /* e_k per image (geometric mean 1) */
   cf_image_info *exif; /* per image with exif_exposures, else NULL */
@@ -181,17 +191,24 @@ static void image_exposures(const cf_synth_options *o, double *exposures, cf_ima
   for (int k = 0; exif && k < o->images; ++k) exposures[k] /= exp(log_sum / o->images);
 }
 
-/* The scene as camera cam sees it, lit by its flash. */
-static void make_scene(const render_job *job, const synth_camera *cam, synth_scene *scene) {
+/* The scene as camera cam sees it, lit by the environment's lights or by
+ * its flash (a point light kept in *flash). */
+static void make_scene(const render_job *job, const synth_camera *cam, synth_scene *scene,
+                       cf_light *flash) {
   const cf_synth_options *o = job->options;
   memset(scene, 0, sizeof *scene);
   scene->model = o->model;
   scene->params = o->params;
-  scene->intensity = job->intensity;
   scene->seed = o->seed;
-  for (int i = 0; i < 3; ++i) /* the flash: C + Rᵀ t_flash */
-    scene->light[i] = cam->c[i] + cam->r[i] * o->flash_offset[0] +
-                      cam->r[3 + i] * o->flash_offset[1] + cam->r[6 + i] * o->flash_offset[2];
+  memset(flash, 0, sizeof *flash);
+  flash->kind = CF_LIGHT_POINT;
+  for (int i = 0; i < 3; ++i) { /* the flash: C + Rᵀ t_flash */
+    flash->position[i] = cam->c[i] + cam->r[i] * o->flash_offset[0] +
+                         cam->r[3 + i] * o->flash_offset[1] + cam->r[6 + i] * o->flash_offset[2];
+    flash->intensity[i] = job->intensity;
+  }
+  scene->lights = job->environment ? job->environment : flash;
+  scene->light_count = job->environment ? o->environment_lights : 1;
   scene->card_albedo = o->reference_albedo;
   scene->card_center[0] = card_center[0];
   scene->card_center[1] = card_center[1];
@@ -264,25 +281,67 @@ static cf_status write_photo(const render_job *job, int k, const char *path, con
   return cf_image_write(path, image, bits, err);
 }
 
+/* Rows first, first + step, ... of camera cam's image: radiance (3 per
+ * pixel) and the sphere's coverage (1 per pixel). */
+typedef struct row_band {
+  const render_job *job;
+  const synth_scene *scene;
+  const synth_camera *cam;
+  int first, step;
+  double *radiance, *covered;
+} row_band;
+
+static void *render_rows(void *arg) {
+  const row_band *b = arg;
+  const int w = b->job->options->width;
+  for (int y = b->first; y < b->job->options->height; y += b->step)
+    for (int x = 0; x < w; ++x) {
+      size_t i = (size_t)y * (size_t)w + (size_t)x;
+      render_pixel(b->job, b->scene, b->cam, x, y, b->radiance + 3 * i, b->covered + i);
+    }
+  return NULL;
+}
+
+/* The radiance of every pixel: with fewer images than threads (one
+ * fidelity image under 1024 lights: 20 s on one thread), the image's rows
+ * interleaved over the threads; else on this image's thread. */
+static void render_radiance(const render_job *job, const synth_scene *scene,
+                            const synth_camera *cam, double *radiance, double *covered) {
+  row_band bands[SYNTH_THREADS];
+  pthread_t threads[SYNTH_THREADS];
+  const int parts = job->options->images < SYNTH_THREADS ? SYNTH_THREADS : 1;
+  int started = 0;
+  for (int t = 0; t < parts; ++t)
+    bands[t] = (row_band){job, scene, cam, t, parts, radiance, covered};
+  for (int t = 1; t < parts; ++t, ++started)
+    if (pthread_create(&threads[t - 1], NULL, render_rows, &bands[t]) != 0) break;
+  render_rows(&bands[0]);
+  for (int t = 0; t < started; ++t) pthread_join(threads[t], NULL);
+  for (int t = started + 1; t < parts; ++t) render_rows(&bands[t]); /* not started */
+}
+
 static cf_status render_image(render_job *job, int k, cf_error *err) {
   const cf_synth_options *o = job->options;
   synth_camera *cam = &job->cameras[k];
   synth_scene scene;
-  make_scene(job, cam, &scene);
+  cf_light flash;
+  make_scene(job, cam, &scene, &flash);
   cf_image image = {0}, mask = {0};
-  cf_status s = cf_image_alloc(&image, o->width, o->height, 3, err);
+  const size_t n = (size_t)o->width * (size_t)o->height;
+  double *radiance = malloc(3 * n * sizeof *radiance), *covered = malloc(n * sizeof *covered);
+  cf_status s = radiance && covered ? cf_image_alloc(&image, o->width, o->height, 3, err)
+                                    : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK && o->write_masks) s = cf_image_alloc(&mask, o->width, o->height, 1, err);
+  if (s == CF_OK) render_radiance(job, &scene, cam, radiance, covered);
+  /* the noise in pixel order, so the draws do not depend on the threads */
   cf_rng rng = cf_rng_seed(o->seed * 1000003u + (uint64_t)k);
-  for (int y = 0; s == CF_OK && y < o->height; ++y) {
-    for (int x = 0; x < o->width; ++x) {
-      double radiance[3], covered;
-      render_pixel(job, &scene, cam, x, y, radiance, &covered);
-      float *pixel = image.pixels + 3 * ((size_t)y * (size_t)o->width + (size_t)x);
-      for (int c = 0; c < 3; ++c)
-        pixel[c] = stored_value(job, job->exposures[k], radiance[c], &rng);
-      if (mask.pixels) mask.pixels[(size_t)y * (size_t)o->width + (size_t)x] = covered == 1.0;
-    }
+  for (size_t i = 0; s == CF_OK && i < n; ++i) {
+    for (int c = 0; c < 3; ++c)
+      image.pixels[3 * i + c] = stored_value(job, job->exposures[k], radiance[3 * i + c], &rng);
+    if (mask.pixels) mask.pixels[i] = covered[i] == 1.0;
   }
+  free(radiance);
+  free(covered);
   char name[64], path[4096];
   snprintf(name, sizeof name, "images/%03d.%s", k, extension(o->format));
   if (s == CF_OK) s = cf_path_join(job->dir, name, path, sizeof path, err);
@@ -384,7 +443,8 @@ static int card_pixel(const render_job *job, const synth_scene *scene, int x, in
 static cf_status card_region(const render_job *job, int region[4], cf_error *err) {
   const synth_camera *cam = &job->cameras[0];
   synth_scene scene;
-  make_scene(job, cam, &scene);
+  cf_light flash;
+  make_scene(job, cam, &scene, &flash);
   double centre[3] = {card_center[0], card_center[1], SYNTH_GROUND_Z}, xc[3], uv[2] = {-1, -1};
   for (int i = 0; i < 3; ++i)
     xc[i] = cam->r[3 * i] * centre[0] + cam->r[3 * i + 1] * centre[1] +
@@ -424,7 +484,7 @@ static cf_status card_region(const render_job *job, int region[4], cf_error *err
       pixel_ray(job, cam, pixel, d);
       double t = (SYNTH_GROUND_Z - cam->c[2]) / d[2];
       double point[3] = {cam->c[0] + t * d[0], cam->c[1] + t * d[1], SYNTH_GROUND_Z};
-      if (synth_in_shadow(point, scene.light))
+      if (synth_in_shadow(point, &flash))
         return cf_error_set(err, CF_EINVAL,
                             "--reference: pixel (%d, %d) of the card in image 0 is in the "
                             "sphere's shadow",
@@ -432,6 +492,34 @@ static cf_status card_region(const render_job *job, int region[4], cf_error *err
     }
   memcpy(region, r, sizeof r);
   return CF_OK;
+}
+
+/* The environment light as the capture format declares it (with key_type
+ * "type") and as truth.json records it (NULL: no type, and the map's
+ * total Σ L dω and its clamped values). The file is relative to the
+ * capture's folder. */
+static json_t *environment_json(const render_job *job, const char *key_type) {
+  const cf_synth_options *o = job->options;
+  json_t *rotation = json_array();
+  for (int i = 0; i < 9; ++i)
+    json_array_append_new(rotation, json_real(o->environment_rotation[i]));
+  /* a capture file holds at most CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS (the fit
+   * keeps every light of every observation): its count says what the fit
+   * will use, truth.json's what rendered the photos (cf_synth_write warns) */
+  const int count = key_type && o->environment_lights > CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS
+                        ? CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS
+                        : o->environment_lights;
+  json_t *light = json_pack("{s:s, s:i, s:o}", "file", job->environment_file, "count", count,
+                            "rotation", rotation);
+  if (key_type) {
+    json_object_set_new(light, key_type, json_string("environment"));
+  } else {
+    const double *total = job->environment_report.total;
+    json_object_set_new(light, "total", rgb_json(total[0], total[1], total[2]));
+    json_object_set_new(light, "clamped",
+                        json_integer((json_int_t)job->environment_report.clamped));
+  }
+  return light;
 }
 
 static cf_status write_capture_file(const char *dir, const render_job *job, cf_error *err) {
@@ -456,9 +544,11 @@ static cf_status write_capture_file(const char *dir, const render_job *job, cf_e
   /* with a reference card, the lights are given wrong by a known factor */
   const int reference = o->reference_albedo > 0.0;
   const double intensity = reference ? CF_SYNTH_REFERENCE_FACTOR * job->intensity : job->intensity;
-  json_t *flash = json_pack("{s:s, s:[f, f, f], s:o}", "type", "flash", "offset",
-                            o->flash_offset[0], o->flash_offset[1], o->flash_offset[2], "intensity",
-                            rgb_json(intensity, intensity, intensity));
+  json_t *flash = job->environment
+                      ? environment_json(job, "type")
+                      : json_pack("{s:s, s:[f, f, f], s:o}", "type", "flash", "offset",
+                                  o->flash_offset[0], o->flash_offset[1], o->flash_offset[2],
+                                  "intensity", rgb_json(intensity, intensity, intensity));
   char name[128];
   snprintf(name, sizeof name, "synthetic %s (%s), %d images", m->name, m->code, o->images);
   json_t *doc = json_pack(
@@ -500,16 +590,20 @@ static cf_status write_truth(const char *dir, const render_job *job, cf_error *e
                         p->components == 3 ? rgb_json(x[0], x[1], x[2]) : json_real(x[0]));
   }
   static const char *const formats[] = {"png8", "png16", "exr", "jpg"};
+  json_t *flash = job->environment ? json_null()
+                                   : json_pack("{s:[f, f, f], s:f}", "offset", o->flash_offset[0],
+                                               o->flash_offset[1], o->flash_offset[2], "intensity",
+                                               job->intensity);
   json_t *doc = json_pack(
-      "{s:s, s:s, s:o, s:{s:[f, f, f], s:f}, s:{s:[f, f, f], s:f}, s:f, s:i, s:s, s:{s:f, "
+      "{s:s, s:s, s:o, s:{s:[f, f, f], s:f}, s:o, s:f, s:i, s:s, s:{s:f, "
       "s:f}, s:I, s:i, s:i, s:f, s:f}",
       "model", m->name, "code", m->code, "params", params, "sphere", "center", 0.0, 0.0, 0.0,
-      "radius", 1.0, "flash", "offset", o->flash_offset[0], o->flash_offset[1], o->flash_offset[2],
-      "intensity", job->intensity, "exposure", 1.0, "supersample", o->supersample, "format",
+      "radius", 1.0, "flash", flash, "exposure", 1.0, "supersample", o->supersample, "format",
       formats[o->format], "noise", "read", o->read_noise, "shot", o->shot_noise, "seed",
       (json_int_t)o->seed, "width", o->width, "height", o->height, "focal_px", o->focal_px,
       "distance", o->distance);
   json_object_set_new(doc, "response", json_string(cf_response_name(job->response)));
+  if (job->environment) json_object_set_new(doc, "environment", environment_json(job, NULL));
   if (o->format == CF_SYNTH_JPEG)
     json_object_set_new(
         doc, "jpeg", json_pack("{s:i, s:s}", "quality", o->jpeg_quality, "subsampling", "4:2:0"));
@@ -527,6 +621,32 @@ static cf_status write_truth(const char *dir, const render_job *job, cf_error *e
                   "intensity_factor", CF_SYNTH_REFERENCE_FACTOR, "region", job->card_region[0],
                   job->card_region[1], job->card_region[2], job->card_region[3]));
   return write_json(dir, "truth.json", doc, err);
+}
+
+/* The environment's lights (median cut of the map, as a capture's
+ * `environment` light loads it) and the map's path relative to dir. */
+static cf_status load_environment(const char *dir, render_job *job, cf_error *err) {
+  const cf_synth_options *o = job->options;
+  if (!o->environment) return CF_OK;
+  int k = o->environment_lights;
+  cf_directional_light *reduced = malloc((size_t)k * sizeof *reduced);
+  job->environment = calloc((size_t)k, sizeof *job->environment);
+  if (!reduced || !job->environment) {
+    free(reduced);
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %d lights", k);
+  }
+  cf_status s = cf_envmap_load(o->environment, o->environment_rotation, k, reduced,
+                               &job->environment_report, err);
+  for (int j = 0; s == CF_OK && j < k; ++j) {
+    job->environment[j].kind = CF_LIGHT_DIRECTIONAL;
+    memcpy(job->environment[j].direction, reduced[j].direction, sizeof reduced[j].direction);
+    memcpy(job->environment[j].intensity, reduced[j].irradiance, sizeof reduced[j].irradiance);
+  }
+  free(reduced);
+  if (s == CF_OK)
+    s = cf_path_relative(dir, o->environment, job->environment_file, sizeof job->environment_file,
+                         err);
+  return s;
 }
 
 static cf_status check_options(const cf_synth_options *o, cf_error *err) {
@@ -560,6 +680,13 @@ static cf_status check_options(const cf_synth_options *o, cf_error *err) {
   if (!(o->reference_albedo >= 0.0 && o->reference_albedo <= 1.0))
     return cf_error_set(err, CF_ERANGE, "reference albedo: %g is outside (0, 1] (0: no card)",
                         o->reference_albedo);
+  if (o->environment && (o->environment_lights < 1 || o->environment_lights > CF_ENVMAP_MAX_LIGHTS))
+    return cf_error_set(err, CF_ERANGE, "--environment-lights: %d is outside [1, %d]",
+                        o->environment_lights, CF_ENVMAP_MAX_LIGHTS);
+  if (o->environment && o->reference_albedo > 0.0)
+    return cf_error_set(err, CF_EINVAL,
+                        "a reference card needs the flash (its region is checked against the "
+                        "flash's shadow): not with an environment");
   return CF_OK;
 }
 
@@ -592,18 +719,22 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
     image_exposures(o, job.exposures, job.exif);
     for (int k = 0; k < o->images; ++k) orbit_camera(o, k, &job.cameras[k]);
   }
+  /* an unreadable map is bad input like a bad option (CF_EINVAL), the
+   * message kept */
+  if (s == CF_OK && (s = load_environment(dir, &job, err)) != CF_OK && s != CF_ENOMEM)
+    s = CF_EINVAL;
   if (s == CF_OK && o->reference_albedo > 0.0) s = card_region(&job, job.card_region, err);
   if (s != CF_OK) {
+    free(job.environment);
     free(job.cameras);
     free(job.exposures);
     free(job.exif);
     return s;
   }
   pthread_mutex_init(&job.lock, NULL);
-  enum { THREADS = 2 };
-  pthread_t threads[THREADS];
+  pthread_t threads[SYNTH_THREADS];
   int started = 0;
-  for (; started < THREADS; ++started)
+  for (; started < SYNTH_THREADS; ++started)
     if (pthread_create(&threads[started], NULL, render_worker, &job) != 0) break;
   if (started == 0) render_worker(&job);
   for (int i = 0; i < started; ++i) pthread_join(threads[i], NULL);
@@ -613,6 +744,7 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
   if (s == CF_OK) s = write_colmap(dir, &job, err);
   if (s == CF_OK) s = write_capture_file(dir, &job, err);
   if (s == CF_OK) s = write_truth(dir, &job, err);
+  free(job.environment);
   free(job.cameras);
   free(job.exposures);
   free(job.exif);

@@ -3,6 +3,7 @@
 #include "synth_scene.h"
 
 #include <math.h>
+#include <string.h>
 
 static const double ground_z = SYNTH_GROUND_Z;
 static const double backdrop_radius = 6.0, backdrop_top = 5.0;
@@ -66,33 +67,69 @@ static void texture(double s, double t, uint64_t seed, double albedo[3]) {
     albedo[c] = grey * (0.8 + 0.2 * value_noise(s * 0.7, t * 0.7, seed + 31 + (uint64_t)c));
 }
 
-int synth_in_shadow(const double x[3], const double light[3]) {
-  double d[3] = {light[0] - x[0], light[1] - x[1], light[2] - x[2]};
-  double length = sqrt(dot3(d, d));
-  for (int k = 0; k < 3; ++k) d[k] /= length;
-  double t = synth_hit_sphere(x, d);
-  return t > 1e-9 && t < length;
+int synth_in_shadow(const double x[3], const cf_light *light) {
+  double l[3], e[3];
+  if (!cf_light_at(light, NULL, NULL, x, l, e)) return 1;
+  double t = synth_hit_sphere(x, l);
+  if (light->kind == CF_LIGHT_DIRECTIONAL) return t > 1e-9;
+  double d[3] = {light->position[0] - x[0], light->position[1] - x[1], light->position[2] - x[2]};
+  return t > 1e-9 && t < sqrt(dot3(d, d));
 }
 
-/* Lambertian radiance at x with normal n and albedo. */
+/* Lambertian radiance at x with normal n and albedo, every light with the
+ * sphere's shadow. */
 static void lambert(const synth_scene *scene, const double x[3], const double n[3],
                     const double albedo[3], double radiance[3]) {
-  double l[3] = {scene->light[0] - x[0], scene->light[1] - x[1], scene->light[2] - x[2]};
-  double d2 = dot3(l, l), cos_i = dot3(l, n) / sqrt(d2);
-  double e = cos_i > 0.0 && !synth_in_shadow(x, scene->light) ? scene->intensity / d2 * cos_i : 0.0;
-  for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / 3.14159265358979323846 * e;
+  double irradiance[3] = {0.0, 0.0, 0.0};
+  for (int j = 0; j < scene->light_count; ++j) {
+    double l[3], e[3];
+    if (!cf_light_at(&scene->lights[j], NULL, NULL, x, l, e)) continue;
+    double cos_i = dot3(l, n);
+    if (!(cos_i > 0.0) || synth_in_shadow(x, &scene->lights[j])) continue;
+    for (int c = 0; c < 3; ++c) irradiance[c] += e[c] * cos_i;
+  }
+  for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / 3.14159265358979323846 * irradiance[c];
+}
+
+/* docs/model.md (5) summed over the lights: L = Σ_j f(n, l_j, v) E_j (n·l_j)+,
+ * lights below the horizon skipped (their term is 0). The lights go to the
+ * evaluator in batches, which prepare the parameters once (a tailed model
+ * builds its masking table there: per light, M2T under 4096 lights took
+ * 354 s against M2's 34). */
+enum { SHADE_BATCH = 64 };
+
+typedef struct shade_batch {
+  double n[3 * SHADE_BATCH], l[3 * SHADE_BATCH], v[3 * SHADE_BATCH];
+  double e[3 * SHADE_BATCH], cos_i[SHADE_BATCH], f[3 * SHADE_BATCH];
+  int count;
+} shade_batch;
+
+static void shade_flush(const synth_scene *scene, shade_batch *b, double radiance[3]) {
+  if (!b->count) return;
+  cf_eval_batch_directions(scene->model, scene->params, (size_t)b->count, b->n, b->l, b->v, b->f,
+                           NULL);
+  for (int k = 0; k < b->count; ++k)
+    for (int c = 0; c < 3; ++c) radiance[c] += b->f[3 * k + c] * b->e[3 * k + c] * b->cos_i[k];
+  b->count = 0;
 }
 
 static void shade_sphere(const synth_scene *scene, const double x[3], const double v[3],
                          double radiance[3]) {
-  double l[3] = {scene->light[0] - x[0], scene->light[1] - x[1], scene->light[2] - x[2]};
-  double d2 = dot3(l, l), inv = 1.0 / sqrt(d2);
-  for (int k = 0; k < 3; ++k) l[k] *= inv;
   const double *n = x; /* unit sphere at the origin */
-  double cos_i = dot3(n, l), f[3];
-  cf_eval(scene->model, scene->params, n, l, v, f, NULL);
-  double e = scene->intensity / d2;
-  for (int c = 0; c < 3; ++c) radiance[c] = cos_i > 0.0 ? f[c] * e * cos_i : 0.0;
+  radiance[0] = radiance[1] = radiance[2] = 0.0;
+  shade_batch b;
+  b.count = 0;
+  for (int j = 0; j < scene->light_count; ++j) {
+    double *l = b.l + 3 * b.count, *e = b.e + 3 * b.count;
+    if (!cf_light_at(&scene->lights[j], NULL, NULL, x, l, e)) continue;
+    double cos_i = dot3(n, l);
+    if (!(cos_i > 0.0)) continue;
+    memcpy(b.n + 3 * b.count, n, 3 * sizeof *n);
+    memcpy(b.v + 3 * b.count, v, 3 * sizeof *v);
+    b.cos_i[b.count] = cos_i;
+    if (++b.count == SHADE_BATCH) shade_flush(scene, &b, radiance);
+  }
+  shade_flush(scene, &b, radiance);
 }
 
 synth_surface synth_shade(const synth_scene *scene, const double origin[3], const double d[3],

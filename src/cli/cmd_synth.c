@@ -4,9 +4,11 @@
 #include <string.h>
 
 #include "args.h"
+#include "clayfit/capture.h"
 #include "clayfit/image.h"
 #include "clayfit/synth.h"
 #include "cli.h"
+#include "core/file.h"
 #include "out_path.h"
 
 static void synth_usage(FILE *out) {
@@ -17,7 +19,9 @@ static void synth_usage(FILE *out) {
           "                     [--read-noise SIGMA] [--shot-noise K] [--no-noise]\n"
           "                     [--flash-intensity I] [--flash-offset x,y,z] [--silhouettes]\n"
           "                     [--masks] [--seed N]\n"
-          "                     [--reference ALBEDO]\n\n"
+          "                     [--reference ALBEDO]\n"
+          "                     [--environment MAP [--environment-lights K]\n"
+          "                      [--environment-rotation r00,r01,...,r22]]\n\n"
           "Renders a clay sphere (radius 1, centre at the origin, z up) on a textured\n"
           "ground inside a textured backdrop, seen by an orbit of N cameras (two rings,\n"
           "20 and 35 degrees up, distance 5), each lit by its flash, with clayfit's image\n"
@@ -48,7 +52,22 @@ static void synth_usage(FILE *out) {
           "  --reference ALBEDO a grey card of this albedo on the ground in front of the\n"
           "                     sphere in image 0; the capture file says \"radiometry\":\n"
           "                     \"relative\", gives the flash intensity times 0.37 (wrong\n"
-          "                     on purpose) and names the card as its reference\n");
+          "                     on purpose) and names the card as its reference\n"
+          "  --environment MAP  light every image with an equirectangular map (linear RGB\n"
+          "                     radiance, e.g. OpenEXR; the capture format's environment\n"
+          "                     convention, docs/captures.md) instead of the flash: its K\n"
+          "                     median-cut directional lights, L = sum_k f E_k (n.l_k)+,\n"
+          "                     the fit's image formation. The sphere is not shadowed by\n"
+          "                     the ground (neither is the fit's); the ground and\n"
+          "                     backdrop are, by the sphere. capture.json declares the\n"
+          "                     map as its environment light (path relative to DIR);\n"
+          "                     not with --flash-offset, --flash-intensity, --reference\n"
+          "  --environment-lights K  median-cut lights, 1..65536 (default 1024); the\n"
+          "                     capture file declares at most 4096 (the fit keeps every\n"
+          "                     light of every observation), truth.json the K rendered\n"
+          "  --environment-rotation r00,...,r22  map frame (y up) to world (z up),\n"
+          "                     row-major, orthonormal (default 1,0,0,0,0,-1,0,1,0:\n"
+          "                     d_world = (x, -z, y) of d_map, the map's up to +z)\n");
 }
 
 enum { MAX_PARAMS = 64 };
@@ -120,6 +139,15 @@ static cf_status parse_setting(int c, const char *arg, cf_synth_options *o, cf_e
       s = cli_parse_count(arg, "--seed", 0, 2147483647, &count, err);
       o->seed = (uint64_t)count;
       return s;
+    case 'E':
+      o->environment = arg;
+      return CF_OK;
+    case 'K':
+      s = cli_parse_count(arg, "--environment-lights", 1, CF_ENVMAP_MAX_LIGHTS, &count, err);
+      o->environment_lights = (int)count;
+      return s;
+    case 'T':
+      return cli_parse_list(arg, "--environment-rotation", 9, o->environment_rotation, err);
     case 'R':
       s = cli_parse_number(arg, "--reference", &o->reference_albedo, err);
       if (s == CF_OK && !(o->reference_albedo > 0.0 && o->reference_albedo <= 1.0))
@@ -132,9 +160,24 @@ static cf_status parse_setting(int c, const char *arg, cf_synth_options *o, cf_e
 
 typedef struct synth_args {
   const char *dir, *model_text;
+  int flash_given; /* the letter of the last --flash-offset, --flash-intensity or --reference */
   const char *assignments[MAX_PARAMS];
   int assignment_count;
 } synth_args;
+
+/* --environment: the map exists, and the flash's options are not given
+ * (the map replaces the flash). */
+static cf_status check_environment(const synth_args *a, const cf_synth_options *o, cf_error *err) {
+  if (!o->environment) return CF_OK;
+  if (a->flash_given)
+    return cf_error_set(err, CF_EINVAL, "--environment replaces the flash: not with %s",
+                        a->flash_given == 'F'   ? "--flash-offset"
+                        : a->flash_given == 'I' ? "--flash-intensity"
+                                                : "--reference");
+  if (!cf_path_exists(o->environment))
+    return cf_error_set(err, CF_ENOTFOUND, "--environment: no file '%s'", o->environment);
+  return CF_OK;
+}
 
 /* The command line into a and o. Returns -1 to go on, else the exit status
  * (--help, a bad option, too many --param); other errors are left in *s
@@ -160,6 +203,9 @@ static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_optio
                                           {"masks", no_argument, NULL, 'M'},
                                           {"seed", required_argument, NULL, 'e'},
                                           {"reference", required_argument, NULL, 'R'},
+                                          {"environment", required_argument, NULL, 'E'},
+                                          {"environment-lights", required_argument, NULL, 'K'},
+                                          {"environment-rotation", required_argument, NULL, 'T'},
                                           {"help", no_argument, NULL, 'h'},
                                           {0}};
   memset(a, 0, sizeof *a);
@@ -191,12 +237,14 @@ static int parse_synth_args(int argc, char **argv, synth_args *a, cf_synth_optio
     } else if (c == '?' || c == ':') {
       return cli_bad_option("synth", argv);
     } else {
+      if (c == 'F' || c == 'I' || c == 'R') a->flash_given = c;
       *s = parse_setting(c, optarg, o, err);
     }
   }
   if (*s == CF_OK && optind < argc)
     *s = cf_error_set(err, CF_EINVAL, "unexpected argument '%s'", argv[optind]);
   if (*s == CF_OK && !a->dir) *s = cf_error_set(err, CF_EINVAL, "-o DIR is required");
+  if (*s == CF_OK) *s = check_environment(a, o, err);
   return -1;
 }
 
@@ -236,6 +284,11 @@ int cmd_synth(int argc, char **argv, cli_context *ctx) {
     cli_report("synth", err.message);
     return s == CF_ERANGE || s == CF_EINVAL ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
   }
+  if (o.environment && o.environment_lights > CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS)
+    fprintf(stderr,
+            "clayfit synth: note: the photos were lit by %d median-cut lights; capture.json "
+            "declares %d, a capture file's limit (truth.json has %d)\n",
+            o.environment_lights, CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS, o.environment_lights);
   if (!ctx->quiet) fprintf(stderr, "clayfit synth: wrote %s/capture.json\n", a.dir);
   return CLI_EXIT_OK;
 }

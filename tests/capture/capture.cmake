@@ -5,6 +5,11 @@ clayfit_c_test(test_capture_synth SOURCES capture/test_capture_synth.c
 # --format jpg with EXIF exposures.
 clayfit_c_test(test_synth_response SOURCES capture/test_synth_response.c
                LIBS clayfit_capture LABELS capture)
+# synth --environment: a uniform map's Lambert sphere is albedo x Lw, the
+# pixels are the loaded capture's lights summed through cf_eval, truth.json
+# records the map, and bad options are refused.
+clayfit_c_test(test_synth_environment SOURCES capture/test_synth_environment.c
+               LIBS clayfit_capture LABELS capture)
 clayfit_c_test(test_capture_file SOURCES capture/test_capture_file.c
                LIBS clayfit_capture LABELS capture)
 target_include_directories(test_capture_file PRIVATE ${PROJECT_SOURCE_DIR}/src)
@@ -95,3 +100,4 @@ clayfit_cli_test(error_synth_exif_png --exit 2 --stderr "EXIF exposures need the
 clayfit_cli_test(error_synth_out_of_range --exit 2
   --stderr "parameter film_f0 of model clay is 0.5, outside its range" --
   ${CLAYFIT} synth -o ${CMAKE_CURRENT_BINARY_DIR}/never --param film_f0=0.5)
+include(capture/synth_environment.cmake)

@@ -178,7 +178,12 @@ int main(void) {
           "{\"clayfit_capture\": 1, " CAMERA ", " IMAGES ", " COLOUR ", " GEOMETRY
           ", \"lights\": [{\"type\": \"environment\", \"file\": \"e.exr\", \"rotation\": [2, 0, "
           "0, 0, 1, 0, 0, 0, 1]}]}",
-          CF_EPARSE, "lights[0].rotation: not a rotation");
+          CF_EPARSE, "lights[0].rotation: environment map rotation is not orthonormal");
+  refused("environment map, a mirror (the old convention's fix)",
+          "{\"clayfit_capture\": 1, " CAMERA ", " IMAGES ", " COLOUR ", " GEOMETRY
+          ", \"lights\": [{\"type\": \"environment\", \"file\": \"e.exr\", \"rotation\": [-1, 0, "
+          "0, 0, 0, -1, 0, 1, 0]}]}",
+          CF_EPARSE, "lights[0].rotation: environment map rotation has determinant -1: a mirror");
   refused("light of unknown type",
           "{\"clayfit_capture\": 1, " CAMERA ", " IMAGES ", " COLOUR ", " GEOMETRY
           ", \"lights\": [{\"type\": \"laser\"}]}",

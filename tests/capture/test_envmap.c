@@ -183,8 +183,31 @@ static void test_rotation(void) {
   CHECK(cf_envmap_median_cut(&map, bad, 4, lights, NULL, &err) == CF_EINVAL,
         "a scaling accepted as rotation");
   printf("scaled rotation: %s\n", err.message);
+  /* a mirror (the old convention needed one to match a renderer) */
+  double mirror[9] = {-1, 0, 0, 0, 1, 0, 0, 0, 1};
+  CHECK(cf_envmap_median_cut(&map, mirror, 4, lights, NULL, &err) == CF_EINVAL &&
+            strstr(err.message, "a mirror"),
+        "a mirror accepted as rotation: %s", err.message);
+  printf("mirror: %s\n", err.message);
+  /* the convention is three.js' equirectUv: u = atan2(d_z, d_x)/2π + ½,
+   * the row from the top acos(d_y)/π (so Cycles' too, after (x, −z, y)) */
+  double worst_uv = 0.0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 64; ++x) {
+      double d[3];
+      cf_envmap_direction(64, 32, x, y, d);
+      double u = atan2(d[2], d[0]) / (2.0 * PI) + 0.5, v = acos(d[1]) / PI;
+      double du = fabs(u - (x + 0.5) / 64.0);
+      du = fmin(du, fabs(du - 1.0));
+      worst_uv = fmax(worst_uv, fmax(du, fabs(v - (y + 0.5) / 32.0)));
+    }
+  printf("three.js' equirectUv of cf_envmap_direction: off the texel centres by %.2g\n", worst_uv);
+  CHECK(worst_uv < 1e-12, "not three.js' equirectangular lookup: off by %g", worst_uv);
   CHECK(cf_envmap_median_cut(&map, NULL, 0, lights, NULL, &err) == CF_EINVAL, "k = 0");
-  CHECK(cf_envmap_median_cut(&map, NULL, 4097, lights, NULL, &err) == CF_EINVAL, "k = 4097");
+  CHECK(
+      cf_envmap_median_cut(&map, NULL, CF_ENVMAP_MAX_LIGHTS + 1, lights, NULL, &err) == CF_EINVAL &&
+          strstr(err.message, "give 1 to"),
+      "k = %d: %s", CF_ENVMAP_MAX_LIGHTS + 1, err.message);
   cf_image tiny;
   make_map(&tiny, 4, 2, 3, sky);
   CHECK(cf_envmap_median_cut(&tiny, NULL, 8, lights, NULL, &err) == CF_OK, "8 lights of 8 px");

@@ -40,9 +40,9 @@ static void die(const cf_error *err) {
 
 /* The map's radiance toward d, bilinear, negatives as 0; the map's
  * convention written out again here (envmap.h): θ = acos(d_y) from +y,
- * φ = atan2(−d_z, d_x), u = φ/2π, v = θ/π, pixel centres at +0.5. */
+ * φ = atan2(−d_z, −d_x), u = φ/2π, v = θ/π, pixel centres at +0.5. */
 static void map_lookup(const cf_image *map, const double d[3], double rgb[3]) {
-  double theta = acos(fmax(-1.0, fmin(1.0, d[1]))), phi = atan2(-d[2], d[0]);
+  double theta = acos(fmax(-1.0, fmin(1.0, d[1]))), phi = atan2(-d[2], -d[0]);
   if (phi < 0) phi += 2 * PI;
   double fx = phi / (2 * PI) * map->width - 0.5, fy = theta / PI * map->height - 0.5;
   int x0 = (int)floor(fx), y0 = (int)floor(fy);
