@@ -29,7 +29,7 @@ FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c
 
 # target: its harness, then the sources it reads with
 fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
-fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c src/capture/capture_spec.c $(CORE)
+fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c src/capture/capture_spec.c $(IMAGE) $(CORE)
 fuzz_text := tests/fuzz/fuzz_text.c tests/fuzz/fuzz_stubs.c $(CAPTURE_FILES) $(IMAGE) $(CORE)
 fuzz_fit_file := tests/fuzz/fuzz_fit_file.c $(FIT_READ) $(MODEL) $(GRID) $(CORE)
 fuzz_image := tests/fuzz/fuzz_image.cpp $(IMAGE) $(CORE)
