@@ -1,5 +1,5 @@
 # The fuzz targets' code on their seeds and on the inputs that once found a
-# bug (tests/fuzz/regressions/TARGET), compiled normally: each is a test
+# bug (tests/fuzz/regressions/fuzz_TARGET), compiled normally: each is a test
 # here, in Release and under ASan+UBSan. scripts/fuzz.sh builds the same
 # targets with libFuzzer (tests/fuzz/fuzz.mk) and fuzzes them.
 find_package(OpenImageIO REQUIRED)
@@ -7,15 +7,15 @@ set(FUZZ_DIR ${CMAKE_CURRENT_SOURCE_DIR}/fuzz)
 
 # clayfit_fuzz_inputs(target label source LIBS... DIRS...): the test
 # fuzz_inputs_<target> runs fuzz/<source> over DIRS and, when it exists,
-# fuzz/regressions/<target>.
+# fuzz/regressions/fuzz_<target> (scripts/fuzz.sh's name for the target).
 function(clayfit_fuzz_inputs target label source)
   cmake_parse_arguments(F "" "" "LIBS;DIRS" ${ARGN})
   add_executable(fuzz_run_${target} fuzz/${source} fuzz/fuzz_main.c)
   target_link_libraries(fuzz_run_${target} PRIVATE ${F_LIBS} clayfit_warnings)
   target_include_directories(fuzz_run_${target} PRIVATE ${PROJECT_SOURCE_DIR}/src)
   set(dirs ${F_DIRS})
-  if(EXISTS ${FUZZ_DIR}/regressions/${target})
-    list(APPEND dirs ${FUZZ_DIR}/regressions/${target})
+  if(EXISTS ${FUZZ_DIR}/regressions/fuzz_${target})
+    list(APPEND dirs ${FUZZ_DIR}/regressions/fuzz_${target})
   endif()
   add_test(NAME fuzz_inputs_${target} COMMAND fuzz_run_${target} ${dirs})
   set_tests_properties(fuzz_inputs_${target} PROPERTIES LABELS "${label};fuzz")

@@ -56,7 +56,9 @@ static void check_light(const cf_capture_spec *s, const cf_light_spec *l) {
                      "a positional light finite, with a COLMAP camera", "");
       break;
     case CF_LIGHT_SPEC_PER_IMAGE:
-      fuzz_require(l->directions && l->intensities, "per-image light files", "");
+      /* a directions file, and an intensities file or "equal" (not both) */
+      fuzz_require(l->directions && (l->intensities != NULL) != (l->intensities_equal != 0),
+                   "per-image light files", "");
       break;
     case CF_LIGHT_SPEC_ENVIRONMENT:
       fuzz_require(
