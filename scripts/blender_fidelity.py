@@ -49,11 +49,7 @@ def one(a, fit_path):
     preset = os.path.join(work, "preset.py")
     run([a.clayfit, "--quiet", "export", fit_path, "--format", "blender", "-o", preset], "export")
     synth = os.path.join(work, "synth")
-    t0 = time.monotonic()
-    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG,
-                 sc.environment_options(a.environment, a.environment_lights,
-                                        a.environment_rotation) if a.environment else None,
-                 a.synth_cache)
+    synth_s = sc.synth_scene(a, fit, synth, PROG)
     t1 = time.monotonic()
     render = os.path.join(work, "blender.exr")
     extra = [x for s in a.set for x in ("--set", s)]
@@ -81,7 +77,7 @@ def one(a, fit_path):
                          "--diff", os.path.join(work, "diff.png")], "blender_compare.py")
     line = next(l for l in out.splitlines() if l.startswith("blender_compare: "))
     r = json.loads(line[len("blender_compare: "):])
-    r.update({"fit": name, "model": fit["model"]["code"], "synth_s": round(t1 - t0, 2),
+    r.update({"fit": name, "model": fit["model"]["code"], "synth_s": round(synth_s, 2),
               "blender_s": round(t2 - t1, 2)})
     return r
 
@@ -91,27 +87,12 @@ def main():
     p.add_argument("clayfit")
     p.add_argument("workdir")
     p.add_argument("fits", nargs="+")
-    p.add_argument("--size", default="320x240")
+    sc.add_scene_arguments(p, "Blender", "the world's texture in Cycles")
     p.add_argument("--samples", type=int, default=64)
-    p.add_argument("--supersample", type=int, default=4)
-    p.add_argument("--flash-offset", default="2.5,-1.5,0")
-    p.add_argument("--set", action="append", default=[])
-    p.add_argument("--max-rmse", type=float)
     p.add_argument("--seed", type=int, default=1, help="Cycles' seed")
-    p.add_argument("--environment", help="an equirectangular EXR: the map's median-cut lights "
-                                         "in clayfit, the world's texture in Cycles")
-    p.add_argument("--environment-lights", type=int, default=1024)
-    p.add_argument("--environment-rotation", help="synth's --environment-rotation")
-    p.add_argument("--synth-cache", help="a folder keeping each clayfit synth, reused by a "
-                                         "later run of the same command")
     p.add_argument("--interpolation", default="Closest", choices=["Closest", "Linear"])
-    p.add_argument("--rotation", help="9 numbers (rows): Blender's map rotation instead of "
-                                      "truth.json's (to show a wrong one fails)")
     p.add_argument("--diffuse-only", action="store_true",
                    help="a Lambert material of the fit's albedo instead of the preset")
-    p.add_argument("--orientation", type=float, metavar="DEGREES",
-                   help="instead of the comparison, the orientation check of a Lambert sphere "
-                        "under a one-patch map: both images lit from the patch within DEGREES")
     p.add_argument("--blender", default=shutil.which("blender"))
     a = p.parse_args()
     if not a.blender:

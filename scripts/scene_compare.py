@@ -17,6 +17,7 @@ import shutil
 import struct
 import subprocess
 import sys
+import time
 import zlib
 
 
@@ -88,6 +89,39 @@ def environment_options(path, lights, rotation):
     its --environment-rotation text)."""
     out = ["--environment", os.path.abspath(path), "--environment-lights", str(lights)]
     return out + (["--environment-rotation", rotation] if rotation else [])
+
+
+def add_scene_arguments(p, renderer, map_use):
+    """The options blender_fidelity.py and threejs_fidelity.py share: the scene,
+    the flash or the map (map_use: what the renderer makes of it), synth's
+    cache, the check's bound and the orientation check."""
+    p.add_argument("--size", default="320x240")
+    p.add_argument("--supersample", type=int, default=4)
+    p.add_argument("--flash-offset", default="2.5,-1.5,0")
+    p.add_argument("--set", action="append", default=[])
+    p.add_argument("--max-rmse", type=float)
+    p.add_argument("--environment", help="an equirectangular EXR: the map's median-cut lights "
+                                         "in clayfit, " + map_use)
+    p.add_argument("--environment-lights", type=int, default=1024)
+    p.add_argument("--environment-rotation", help="synth's --environment-rotation")
+    p.add_argument("--synth-cache", help="a folder keeping each clayfit synth, reused by a "
+                                         "later run of the same command")
+    p.add_argument("--rotation", help=f"9 numbers (rows): {renderer}'s map rotation instead of "
+                                      "truth.json's (to show a wrong one fails)")
+    p.add_argument("--orientation", type=float, metavar="DEGREES",
+                   help="instead of the comparison, the orientation check of a Lambert sphere "
+                        "under a one-patch map: both images lit from the patch within DEGREES")
+
+
+def synth_scene(a, fit, folder, prog):
+    """clayfit's rendering of the scene the parsed options a (add_scene_arguments)
+    describe, for fit, into folder; its seconds."""
+    t0 = time.monotonic()
+    environment = environment_options(a.environment, a.environment_lights,
+                                      a.environment_rotation) if a.environment else None
+    synth_fit(a.clayfit, fit, folder, a.size, a.supersample, a.flash_offset, prog, environment,
+              a.synth_cache)
+    return time.monotonic() - t0
 
 
 # --- the environment map's frame ----------------------------------------------

@@ -147,12 +147,7 @@ def prepare(a, fit_path):
     sc.run([a.clayfit, "--quiet", "export", fit_path, "--format", "gltf", "-o", gltf], "export",
            PROG)
     synth = os.path.join(work, "synth")
-    t0 = time.monotonic()
-    sc.synth_fit(a.clayfit, fit, synth, a.size, a.supersample, a.flash_offset, PROG,
-                 sc.environment_options(a.environment, a.environment_lights,
-                                        a.environment_rotation) if a.environment else None,
-                 a.synth_cache)
-    synth_s = time.monotonic() - t0
+    synth_s = sc.synth_scene(a, fit, synth, PROG)
     camera = sc.colmap_camera(synth)
     w, h = map(int, a.size.split("x"))
     job = {"name": name, "gltf": open(gltf, encoding="utf-8").read(), "width": w, "height": h,
@@ -179,23 +174,8 @@ def main():
     p.add_argument("node_modules")
     p.add_argument("workdir")
     p.add_argument("fits", nargs="+")
-    p.add_argument("--size", default="320x240")
-    p.add_argument("--supersample", type=int, default=4)
-    p.add_argument("--flash-offset", default="2.5,-1.5,0")
-    p.add_argument("--set", action="append", default=[])
+    sc.add_scene_arguments(p, "three.js", "scene.environment in three.js")
     p.add_argument("--margin", type=int, default=2)
-    p.add_argument("--max-rmse", type=float)
-    p.add_argument("--environment", help="an equirectangular EXR: the map's median-cut lights "
-                                         "in clayfit, scene.environment in three.js")
-    p.add_argument("--environment-lights", type=int, default=1024)
-    p.add_argument("--environment-rotation", help="synth's --environment-rotation")
-    p.add_argument("--synth-cache", help="a folder keeping each clayfit synth, reused by a "
-                                         "later run of the same command")
-    p.add_argument("--rotation", help="9 numbers (rows): three.js' map rotation instead of "
-                                      "truth.json's (to show a wrong one fails)")
-    p.add_argument("--orientation", type=float, metavar="DEGREES",
-                   help="instead of the comparison, the orientation check of a Lambert sphere "
-                        "under a one-patch map: both images lit from the patch within DEGREES")
     a = p.parse_args()
     browser, skip = sc.chromium_skip(a.node_modules)
     if skip:
