@@ -9,7 +9,7 @@
 
 #include "core/order_statistics.h"
 #include "lsq/lsq.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 
 enum { BLOCK_SIZE = 1024 };
 

@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/parallel.h"
 #include "lsq.h"
-#include "parallel.h"
 
 namespace lsq {
 

@@ -24,10 +24,10 @@
 #include <string.h>
 
 #include "clayfit/model.h"
+#include "core/parallel.h"
 #include "fit_problem.h"
 #include "fit_support.h"
 #include "lsq/lsq.h"
-#include "lsq/parallel.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
