@@ -18,10 +18,9 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "core/vec.h"
 #include "envmap.h"
 #include "synth_scene.h"
-
-#define SYNTH_PI 3.14159265358979323846
 
 /* The reference card (--reference): a square on the ground between the
  * sphere and camera 0 (azimuth 0), where that camera sees the ground in
@@ -97,8 +96,8 @@ static void matrix_to_quaternion(const double r[9], double q[4]) {
  * alternating), evenly spaced in azimuth, looking at the sphere's centre.
  * COLMAP's axes: x right, y down, z forward. */
 static void orbit_camera(const cf_synth_options *o, int k, synth_camera *cam) {
-  double azimuth = 2.0 * SYNTH_PI * k / o->images;
-  double elevation = (k % 2 ? 35.0 : 20.0) * SYNTH_PI / 180.0;
+  double azimuth = 2.0 * CF_PI * k / o->images;
+  double elevation = (k % 2 ? 35.0 : 20.0) * CF_PI / 180.0;
   double c[3] = {o->distance * cos(elevation) * cos(azimuth),
                  o->distance * cos(elevation) * sin(azimuth), o->distance * sin(elevation)};
   double forward[3] = {-c[0] / o->distance, -c[1] / o->distance, -c[2] / o->distance};
@@ -106,9 +105,8 @@ static void orbit_camera(const cf_synth_options *o, int k, synth_camera *cam) {
   double right[3] = {forward[1], -forward[0], 0.0};
   double length = sqrt(right[0] * right[0] + right[1] * right[1]);
   for (int i = 0; i < 3; ++i) right[i] /= length;
-  double down[3] = {forward[1] * right[2] - forward[2] * right[1],
-                    forward[2] * right[0] - forward[0] * right[2],
-                    forward[0] * right[1] - forward[1] * right[0]};
+  double down[3];
+  cf_cross3(forward, right, down);
   for (int i = 0; i < 3; ++i) {
     cam->r[i] = right[i];
     cam->r[3 + i] = down[i];
@@ -701,7 +699,7 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
   /* a white Lambert surface facing the flash at the orbit's distance has
    * radiance 0.5: I/(π D²) = 0.5 */
   job.intensity =
-      o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * SYNTH_PI * o->distance * o->distance;
+      o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * CF_PI * o->distance * o->distance;
   job.response = synth_response(o);
   job.cameras = calloc((size_t)o->images, sizeof *job.cameras);
   job.exposures = calloc((size_t)o->images, sizeof *job.exposures);

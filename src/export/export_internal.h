@@ -8,8 +8,7 @@
 
 #include "clayfit/export.h"
 #include "core/text_escape.h"
-
-#define EXPORT_PI 3.14159265358979323846
+#include "core/vec.h"
 
 /* ---- text ---- */
 typedef struct export_text {

@@ -124,7 +124,7 @@ double export_f0_from_ior(double ior) {
 }
 
 double export_sigma_materialx_glsl(double sigma) {
-  return sigma / EXPORT_PI;
+  return sigma / CF_PI;
 }
 
 double export_sigma_fujii(double sigma) {
@@ -296,7 +296,7 @@ void export_common_notes(export_notes *n, const export_material *m) {
 /* export_internal.h */
 void export_gauss_legendre01(int n, double *x, double *w) {
   for (int i = 0; i < (n + 1) / 2; ++i) {
-    double z = cos(EXPORT_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
+    double z = cos(CF_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
     for (int it = 0; it < 100; ++it) {
       double p1 = 1.0, p2 = 0.0;
       for (int j = 1; j <= n; ++j) {
@@ -391,16 +391,16 @@ static void tail_view_nodes(tail_problem *p, const cf_std_tail *t, const tail_fr
    * the quadrature moved the loss by 1.9 % with nodes up to 90°, 4e-5 so */
   double u_max = 1.0;
   if (film)
-    u_max = 2.0 / EXPORT_PI * atan(sqrt(1.0 - film->c_min * film->c_min) / (film->c_min * alpha));
+    u_max = 2.0 / CF_PI * atan(sqrt(1.0 - film->c_min * film->c_min) / (film->c_min * alpha));
   for (int a = 0; a < q->thetas; ++a) {
-    double tu = tan(0.5 * EXPORT_PI * u_max * xu[a]), tan_h = alpha * tu, tan2 = tan_h * tan_h;
-    double dtheta = u_max * alpha * 0.5 * EXPORT_PI * (1.0 + tu * tu) / (1.0 + tan2);
+    double tu = tan(0.5 * CF_PI * u_max * xu[a]), tan_h = alpha * tu, tan2 = tan_h * tan_h;
+    double dtheta = u_max * alpha * 0.5 * CF_PI * (1.0 + tu * tu) / (1.0 + tan2);
     double cos2_h = 1.0 / (1.0 + tan2), sin2_h = tan2 * cos2_h;
     double c_h = sqrt(cos2_h), s_h = tan_h * c_h;
     /* c_i > 0  <=>  cos φ > −c_o cos 2θ_h / (s_o sin 2θ_h) = num / den */
     double num = -c_o * (cos2_h - sin2_h), den = 2.0 * s_o * s_h * c_h;
     if (num >= den) continue; /* no φ lights this h */
-    double phi_max = num <= -den ? EXPORT_PI : acos(num / den);
+    double phi_max = num <= -den ? CF_PI : acos(num / den);
     for (int b = 0; b < q->phis; ++b) {
       double phi = phi_max * xp[b];
       double c_d = s_o * s_h * cos(phi) + c_o * c_h, c_i = 2.0 * c_d * c_h - c_o;
@@ -461,16 +461,15 @@ static cf_status tail_problem_build(tail_problem *p, double r, double gamma, dou
    * film, c_o' in [c_min, 1], no grazing view: uniform in c_o'. */
   for (int v = 0; v < q->views && film; ++v) {
     double c_o = film->c_min + (1.0 - film->c_min) * xo[v], c_out;
-    double w_o =
-        2.0 * EXPORT_PI * (1.0 - film->c_min) * wo[v] * tail_film_factor(film, c_o, &c_out);
+    double w_o = 2.0 * CF_PI * (1.0 - film->c_min) * wo[v] * tail_film_factor(film, c_o, &c_out);
     if (w_o > 0.0) tail_view_nodes(p, &t, &fr, film, c_o, w_o, q, xu, wu, xp, wp);
   }
   for (int v = 0; v < q->views && !film; ++v) {
-    double tu = tan(0.5 * EXPORT_PI * xo[v]), tan_psi = r * tu;
-    double dpsi = r * 0.5 * EXPORT_PI * (1.0 + tu * tu) / (1.0 + tan_psi * tan_psi);
+    double tu = tan(0.5 * CF_PI * xo[v]), tan_psi = r * tu;
+    double dpsi = r * 0.5 * CF_PI * (1.0 + tu * tu) / (1.0 + tan_psi * tan_psi);
     double cos_psi = 1.0 / sqrt(1.0 + tan_psi * tan_psi), c_o = tan_psi * cos_psi;
     /* c_o dω_o = 2π c_o dc_o, dc_o = cos ψ dψ */
-    double w_o = 2.0 * EXPORT_PI * c_o * cos_psi * dpsi * wo[v];
+    double w_o = 2.0 * CF_PI * c_o * cos_psi * dpsi * wo[v];
     tail_view_nodes(p, &t, &fr, NULL, c_o, w_o, q, xu, wu, xp, wp);
   }
   free(rules);
@@ -741,7 +740,7 @@ static cf_status diffuse_accumulate(const cf_fit_file *fit, export_diffuse_basis
     for (int b = 0; b < Q; ++b) {
       double ci = x[b], si = sqrt(1.0 - ci * ci);
       for (int c = 0; c < Q; ++c) {
-        double phi = EXPORT_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
+        double phi = CF_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
         double weight = co * w[a] * w[b] * w[c], f[3], lobes[3];
         cf_status st = cf_eval(model, fit->result.params, n, l, v, f, NULL);
         if (st == CF_OK) st = cf_eval(model, lobe_params, n, l, v, lobes, NULL);
@@ -810,7 +809,7 @@ static double coat_schlick(double c) {
 static double coat_ggx(double r, double ci, double co, double ch, double vh) {
   double a2 = r * r * r * r, d = ch * ch * (a2 - 1.0) + 1.0;
   double gv = ci * sqrt(co * co * (1.0 - a2) + a2), gl = co * sqrt(ci * ci * (1.0 - a2) + a2);
-  return coat_schlick(vh) * a2 / (EXPORT_PI * d * d) * 0.5 / (gv + gl);
+  return coat_schlick(vh) * a2 / (CF_PI * d * d) * 0.5 / (gv + gl);
 }
 
 static double coat_roughness(int k) {
@@ -837,18 +836,18 @@ cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *ro
   for (int a = 0; a < COAT_VIEWS; ++a) {
     double co = xv[a], v[3] = {sqrt(1.0 - co * co), 0.0, co};
     for (int b = 0; b < COAT_THETAS; ++b) {
-      double q = 0.5 * EXPORT_PI * xt[b], tq = tan(q);
+      double q = 0.5 * CF_PI * xt[b], tq = tan(q);
       double th = atan(COAT_THETA_SCALE * tq);
-      double dth = COAT_THETA_SCALE * 0.5 * EXPORT_PI / (cos(q) * cos(q)) /
+      double dth = COAT_THETA_SCALE * 0.5 * CF_PI / (cos(q) * cos(q)) /
                    (1.0 + COAT_THETA_SCALE * COAT_THETA_SCALE * tq * tq);
       for (int c = 0; c < COAT_PHIS; ++c) {
-        double phi = EXPORT_PI * xp[c]; /* [0, π]: the lobe is even in φ_h */
+        double phi = CF_PI * xp[c]; /* [0, π]: the lobe is even in φ_h */
         double h[3] = {sin(th) * cos(phi), sin(th) * sin(phi), cos(th)};
         double vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
         double l[3] = {2.0 * vh * h[0] - v[0], 2.0 * vh * h[1] - v[1], 2.0 * vh * h[2] - v[2]};
         if (vh <= 0.0 || l[2] <= 1e-9) continue;
         double ci = l[2], f[3], base[3];
-        double w = co * wv[a] * wt[b] * dth * sin(th) * EXPORT_PI * wp[c] * 4.0 * vh;
+        double w = co * wv[a] * wt[b] * dth * sin(th) * CF_PI * wp[c] * 4.0 * vh;
         cf_status s = cf_eval(fit->result.model, fit->result.params, n, l, v, f, NULL);
         if (s == CF_OK) s = cf_eval(fit->result.model, no_coat, n, l, v, base, NULL);
         if (s != CF_OK)

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "core/vec.h"
 #include "export_shader.h"
 
 static const char glsl_prelude[] =
@@ -19,12 +20,13 @@ static const char glsl_prelude[] =
 
 static const char hlsl_prelude[] = "// HLSL prelude: the shared body is HLSL's types already\n";
 
+static const char shared_begin[] =
+    "// ---- clayfit shared body: begin (docs/model.md; generated, do not edit)\n";
+
 /* The one source of the maths, a line a string (C99 caps a literal at 4095
- * characters). Equation numbers are docs/model.md's. */
+ * characters), after shared_begin and the constants (the C ones, every
+ * digit printed). Equation numbers are docs/model.md's. */
 static const char *const shared_body[] = {
-    "// ---- clayfit shared body: begin (docs/model.md; generated, do not edit)\n",
-    "#define CF_PI 3.14159265358979\n",
-    "#define CF_INV_PI 0.318309886183791\n",
     "\n",
     "// the fitted parameters (docs/model.md §1.5); a rung reads its own\n",
     "struct cf_params {\n",
@@ -357,6 +359,8 @@ void export_shader_library(export_text *t, export_shader_lang lang, const export
   export_printf(t, "#define CLAYFIT_MODEL %d\n#define CLAYFIT_TAILED %d\n", export_shader_rung(m),
                 m->lobe_count > 0);
   export_printf(t, "%s", lang == EXPORT_SHADER_GLSL ? glsl_prelude : hlsl_prelude);
+  export_printf(t, "%s#define CF_PI %.17g\n#define CF_INV_PI %.17g\n", shared_begin, CF_PI,
+                CF_INV_PI);
   for (size_t i = 0; i < sizeof shared_body / sizeof shared_body[0]; ++i)
     export_printf(t, "%s", shared_body[i]);
 }
