@@ -136,13 +136,11 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
   fit_problem *sub;
   cf_status s = fit_sample_problem(&sub, &sample, capture, o->model, population, target, err);
   if (s != CF_OK) return s;
-  s = fit_declare(sub, plan, err);
+  s = fit_declare_robust(sub, plan, o, sigma, err);
   fit_values *v = fit_problem_values(sub);
   if (s == CF_OK) {
     memcpy(v->params, params, sizeof v->params);
     v->log_scale = *log_scale;
-    if (!fit_capture_has_noise(capture)) fit_problem_set_sigma(sub, sigma);
-    fit_problem_set_loss(sub, o->loss, o->loss_scale);
     fit_problem_settings(sub)->newton_start = 1; /* from the best start's minimum */
     s = solve_switching(sub, o, plan, r, switched, err);
   }
@@ -260,13 +258,9 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
   cf_capture_summarize(run->capture, &about);
   run->plan.response = about.tone_curve_unknown;
   if (run->plan.response) memcpy(v->response, response, sizeof v->response);
-  if (s == CF_OK) s = fit_declare(p, &run->plan, err);
+  if (s == CF_OK) s = fit_declare_robust(p, &run->plan, o, run->sigma, err);
   run->has_noise = fit_capture_has_noise(run->capture);
-  if (!run->has_noise) {
-    fit_problem_set_sigma(p, run->sigma);
-    run->r->sigma = run->sigma;
-  }
-  fit_problem_set_loss(p, o->loss, o->loss_scale);
+  if (!run->has_noise) run->r->sigma = run->sigma;
   return s;
 }
 

@@ -57,6 +57,15 @@ cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err) {
   return fit_problem_finish(p, err);
 }
 
+cf_status fit_declare_robust(fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
+                             double sigma, cf_error *err) {
+  cf_status s = fit_declare(p, plan, err);
+  if (s != CF_OK) return s;
+  if (!fit_capture_has_noise(fit_problem_capture(p))) fit_problem_set_sigma(p, sigma);
+  fit_problem_set_loss(p, o->loss, o->loss_scale);
+  return CF_OK;
+}
+
 void fit_progress(const cf_fit_options *o, const char *stage, size_t done, size_t total) {
   if (o->progress) o->progress(o->progress_user, stage, done, total);
 }

@@ -33,6 +33,12 @@ cf_status fit_plan_for(const cf_capture *capture, const cf_fit_options *o, fit_p
 /* Declare the plan's unknowns on the problem. */
 cf_status fit_declare(fit_problem *p, const fit_plan *plan, cf_error *err);
 
+/* ... for a robust solve: then `sigma` for every residual (unless the
+ * capture has a noise model; through the curve when the response is on)
+ * and the options' loss. */
+cf_status fit_declare_robust(fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
+                             double sigma, cf_error *err);
+
 void fit_progress(const cf_fit_options *o, const char *stage, size_t done, size_t total);
 
 #endif /* CLAYFIT_FIT_PLAN_H */

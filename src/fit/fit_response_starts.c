@@ -100,13 +100,10 @@ typedef struct start_run {
 
 /* A reweighted solve of the subsample with the plan's unknowns. */
 static cf_status solve_start(start_run *run, const fit_plan *plan, cf_error *err) {
-  fit_problem *sub = run->sub;
-  cf_status s = fit_declare(sub, plan, err);
+  cf_status s = fit_declare_robust(run->sub, plan, run->o, run->sigma, err);
   if (s != CF_OK) return s;
-  if (!fit_capture_has_noise(run->capture)) fit_problem_set_sigma(sub, run->sigma);
-  fit_problem_set_loss(sub, run->o->loss, run->o->loss_scale);
   cf_lsq_summary summary;
-  return fit_solve_reweighted(sub, run->o, START_ROUNDS, &summary, NULL, err);
+  return fit_solve_reweighted(run->sub, run->o, START_ROUNDS, &summary, NULL, err);
 }
 
 /* The subsample's values kept when they are the most likely yet. */

@@ -1,9 +1,11 @@
-/* σ of every residual: the capture's noise model, or one σ, carried
- * through the response curve (fit_problem.h). */
+/* What a residual weighs and costs (fit_problem.h): σ of every residual
+ * (the capture's noise model, or one σ, carried through the response
+ * curve), the robust loss and the censored likelihood of a clipped
+ * channel (fit_loss.h inlines the loss for the kernel). */
 #include <math.h>
 #include <stdlib.h>
 
-#include "problem.h"
+#include "fit_loss.h"
 
 /* Does the capture give a noise model with some noise in it? */
 static int capture_noise(const cf_capture *capture, double *read, double *shot) {
@@ -34,10 +36,12 @@ static double noise_variance(const fit_problem *p, double read, double shot, dou
   return slope * slope * (read * read + shot * x);
 }
 
-/* (mu may be rows.inv_sigma itself) The variance floored at its smallest
- * positive value over them: a dark pixel with no read noise would
- * otherwise weigh infinitely. */
-void fit_noise_inv_sigma(fit_problem *p, double read, double shot, const double *mu) {
+/* 1/σ of the noise model at the values mu (3 per observation used: the
+ * measurements or the predictions; mu may be rows.inv_sigma itself), read
+ * noise `read` and shot noise `shot` (with a response curve on: through
+ * the curve), the variance floored at its smallest positive value over
+ * them: a dark pixel with no read noise would otherwise weigh infinitely. */
+static void noise_inv_sigma(fit_problem *p, double read, double shot, const double *mu) {
   size_t n = 3 * p->rows.count;
   double *inv_sigma = p->rows.inv_sigma, floor = HUGE_VAL;
   for (size_t i = 0; i < n; ++i) {
@@ -56,10 +60,6 @@ double fit_problem_curve_slope(const fit_problem *p, double mu) {
   return sqrt(noise_variance(p, 1.0, 0.0, mu));
 }
 
-double fit_problem_sigma(const fit_problem *p) {
-  return p->rows.sigma;
-}
-
 void fit_problem_set_sigma(fit_problem *p, double sigma) {
   double read, shot;
   int noise = capture_noise(p->capture, &read, &shot);
@@ -70,8 +70,8 @@ void fit_problem_set_sigma(fit_problem *p, double sigma) {
    * model's 1/σ (or τ R'(x)'s: a read noise τ alone) */
   for (size_t i = 0; i < 3 * r->count; ++i)
     r->inv_sigma[i] = noise || through ? r->y[i] : 1.0 / sqrt(sigma * sigma);
-  if (noise) fit_noise_inv_sigma(p, read, shot, r->inv_sigma);
-  if (through) fit_noise_inv_sigma(p, sigma, 0.0, r->inv_sigma);
+  if (noise) noise_inv_sigma(p, read, shot, r->inv_sigma);
+  if (through) noise_inv_sigma(p, sigma, 0.0, r->inv_sigma);
 }
 
 cf_status fit_problem_reweight(fit_problem *p, cf_error *err) {
@@ -86,8 +86,43 @@ cf_status fit_problem_reweight(fit_problem *p, cf_error *err) {
   double *measured = malloc((n ? n : 1) * sizeof *measured);
   cf_status s = prediction && measured ? fit_problem_predict(p, prediction, measured, err)
                                        : cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) fit_noise_inv_sigma(p, read, shot, prediction);
+  if (s == CF_OK) noise_inv_sigma(p, read, shot, prediction);
   free(prediction);
   free(measured);
   return s;
+}
+
+double fit_problem_loss_weight(const fit_problem *p, double s) {
+  double rho1 = 1.0;
+  fit_robust(p, s, &rho1);
+  return rho1;
+}
+
+int fit_problem_censored(const fit_problem *p, size_t i, double prediction, double measured) {
+  return fit_censored_at(p, i / 3, (int)(i % 3), prediction, measured);
+}
+
+double fit_censored_residual(double z, double *slope) {
+  /* beyond 30, 1 − Φ(z) is below 1e-197 (t² would underflow) */
+  if (!(z < 30.0)) {
+    *slope = 0.0;
+    return 0.0;
+  }
+  if (z < -37.0) { /* erfc underflows: Φ(z) = φ(z)/(−z) (1 − 1/z² + 3/z⁴ − …) */
+    double w = 1.0 / (z * z), series = 1.0 - w + 3.0 * w * w;
+    double t = -sqrt(z * z + 2.0 * log(-z) + 1.8378770664093453 - 2.0 * log(series));
+    double dseries = (2.0 * w - 12.0 * w * w) / z; /* d series / dz */
+    *slope = (z + 1.0 / z - dseries / series) / t;
+    return t;
+  }
+  double tail = 0.5 * erfc(z / sqrt(2.0)); /* 1 − Φ(z) */
+  double phi_cdf = 0.5 * erfc(-z / sqrt(2.0));
+  double cost = -2.0 * (z > 0.0 ? log1p(-tail) : log(phi_cdf));
+  if (!(cost > 0.0)) {
+    *slope = 0.0;
+    return 0.0;
+  }
+  double t = sqrt(cost), density = 0.3989422804014327 * exp(-0.5 * z * z); /* φ(z) */
+  *slope = density / (phi_cdf * t);
+  return -t;
 }

@@ -1,5 +1,6 @@
 /* The fit's least-squares problem as a whole (fit_problem.h): made from a
  * capture's observations, forked for the multi-start, freed, read. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -163,4 +164,89 @@ int fit_problem_response_on(const fit_problem *p) {
 
 const fit_groups *fit_problem_groups(const fit_problem *p) {
   return &p->groups;
+}
+
+double fit_problem_sigma(const fit_problem *p) {
+  return p->rows.sigma;
+}
+
+void fit_problem_set_loss(fit_problem *p, cf_loss loss, double scale) {
+  p->loss = loss;
+  p->loss_scale = scale;
+}
+
+cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, cf_error *err) {
+  fit_rows *r = &p->rows;
+  free(r->sample_root);
+  r->sample_root = malloc((r->count ? r->count : 1) * sizeof *r->sample_root);
+  if (!r->sample_root) return cf_error_set(err, CF_ENOMEM, "out of memory");
+  for (size_t i = 0; i < r->count; ++i) r->sample_root[i] = sqrt(weight[i]);
+  return CF_OK;
+}
+
+void fit_problem_set_measured(fit_problem *p, const double *y, const uint8_t *flags) {
+  fit_rows *r = &p->rows;
+  for (size_t i = 0; i < r->count; ++i) {
+    size_t k = fit_rows_observation(r, i);
+    for (int c = 0; c < 3; ++c) r->y[3 * i + (size_t)c] = y[3 * k + (size_t)c];
+    r->flags[i] = flags[k];
+  }
+}
+
+size_t fit_problem_pairs(const fit_problem *p, size_t i, const cf_geometry **geometry,
+                         const double **weight) {
+  size_t first, slots = fit_rows_slot_range(&p->rows, i, &first);
+  *geometry = p->rows.geometry + first;
+  *weight = p->rows.weight + 3 * first;
+  return slots;
+}
+
+int fit_problem_unknown_count(const fit_problem *p) {
+  return p->unknowns.num;
+}
+
+fit_unknown fit_problem_unknown(const fit_problem *p, int u) {
+  return p->unknowns.unknown[u];
+}
+
+int fit_problem_has_kind(const fit_problem *p, const fit_kind *kind) {
+  return fit_unknowns_run(&p->unknowns, kind) != NULL;
+}
+
+double fit_problem_lower(const fit_problem *p, int u) {
+  return p->unknowns.lower[u];
+}
+
+double fit_problem_upper(const fit_problem *p, int u) {
+  return p->unknowns.upper[u];
+}
+
+int *fit_problem_at_bound(fit_problem *p) {
+  return p->unknowns.at_bound;
+}
+
+const int *fit_problem_read_at_bound(const fit_problem *p) {
+  return p->unknowns.at_bound;
+}
+
+size_t fit_problem_block_count(const fit_problem *p) {
+  return p->blocks.count;
+}
+
+int fit_problem_block_columns(void *user, size_t block, const int **columns) {
+  const fit_problem *p = user;
+  *columns = p->blocks.column + p->blocks.column_begin[block];
+  return (int)(p->blocks.column_begin[block + 1] - p->blocks.column_begin[block]);
+}
+
+fit_solve_settings *fit_problem_settings(fit_problem *p) {
+  return &p->settings;
+}
+
+void fit_problem_forget_radius(fit_problem *p) {
+  p->radius = 0.0;
+}
+
+const fit_tally *fit_problem_tally(const fit_problem *p) {
+  return &p->tally;
 }

@@ -85,28 +85,3 @@ void fit_rows_release(fit_rows *rows) {
   memset(rows, 0, sizeof *rows);
 }
 
-cf_status fit_problem_set_sample_weights(fit_problem *p, const double *weight, cf_error *err) {
-  fit_rows *r = &p->rows;
-  free(r->sample_root);
-  r->sample_root = malloc((r->count ? r->count : 1) * sizeof *r->sample_root);
-  if (!r->sample_root) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t i = 0; i < r->count; ++i) r->sample_root[i] = sqrt(weight[i]);
-  return CF_OK;
-}
-
-void fit_problem_set_measured(fit_problem *p, const double *y, const uint8_t *flags) {
-  fit_rows *r = &p->rows;
-  for (size_t i = 0; i < r->count; ++i) {
-    size_t k = fit_rows_observation(r, i);
-    for (int c = 0; c < 3; ++c) r->y[3 * i + (size_t)c] = y[3 * k + (size_t)c];
-    r->flags[i] = flags[k];
-  }
-}
-
-size_t fit_problem_pairs(const fit_problem *p, size_t i, const cf_geometry **geometry,
-                         const double **weight) {
-  size_t first, slots = fit_rows_slot_range(&p->rows, i, &first);
-  *geometry = p->rows.geometry + first;
-  *weight = p->rows.weight + 3 * first;
-  return slots;
-}

@@ -15,18 +15,6 @@ int fit_threads(const cf_fit_options *o) {
   return o->threads > 0 ? o->threads : 2;
 }
 
-fit_solve_settings *fit_problem_settings(fit_problem *p) {
-  return &p->settings;
-}
-
-void fit_problem_forget_radius(fit_problem *p) {
-  p->radius = 0.0;
-}
-
-const fit_tally *fit_problem_tally(const fit_problem *p) {
-  return &p->tally;
-}
-
 void fit_lsq_problem(fit_problem *p, double *x, cf_lsq_problem *problem) {
   const fit_unknowns *u = &p->unknowns;
   *problem = (cf_lsq_problem){u->num,         x,   u->lower,   u->upper, p->blocks.count,

@@ -2,8 +2,8 @@
  * files of src/fit/problem/ alone (and white-box tests):
  *   fit_rows.c      the observations used: measurements, pairs, σ, weights
  *   fit_groups.c    the capture's images and lights as the gains group them
- *   fit_noise.c     σ of every residual: the noise model, through the curve
- *   fit_loss.c      what a residual costs: the robust loss, censoring
+ *   fit_noise.c     what a residual weighs and costs: σ from the noise model
+ *                   (through the curve), the robust loss (fit_loss.h), censoring
  *   fit_unknowns.c  what x holds: the unknowns, their runs, the blocks' columns
  *   fit_kind_*.c    one kind of unknown each (kind.h)
  *   fit_scratch.c   the evaluations' working memory
@@ -11,7 +11,8 @@
  *   fit_predict.c   the prediction of every observation
  *   fit_solve.c     the solves through lsq.h
  *   fit_footprint.c pixel footprints: each observation's pairs over its pixel
- *   fit_problem.c   the problem as a whole: made, forked, freed, read */
+ *   fit_problem.c   the problem as a whole: made, forked, freed; what the
+ *                   stages read of it and set on it (fit_problem.h) */
 #ifndef CLAYFIT_FIT_PROBLEM_PARTS_H
 #define CLAYFIT_FIT_PROBLEM_PARTS_H
 
@@ -171,12 +172,5 @@ cf_status fit_values_alloc(fit_values *v, size_t images, size_t lights, cf_error
 /* The pool (fit_problem_finish), once per problem; and freed. */
 int fit_scratch_pool_make(fit_scratch_pool *pool);
 void fit_scratch_pool_free(fit_scratch_pool *pool);
-
-/* ---- noise (fit_noise.c) ---- */
-
-/* 1/σ of the noise model at the values mu (3 per observation used: the
- * measurements or the predictions), read noise `read` and shot noise
- * `shot` (with a response curve on: through the curve). */
-void fit_noise_inv_sigma(fit_problem *p, double read, double shot, const double *mu);
 
 #endif /* CLAYFIT_FIT_PROBLEM_PARTS_H */
