@@ -1,11 +1,12 @@
-/* Pixel footprints in the fit (fit_footprint.h). */
-#include "fit_footprint.h"
+/* Pixel footprints in the fit: each observation's pairs over its pixel
+ * (fit_problem.h). */
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "lsq/parallel.h"
+#include "problem.h"
 
 /* The observations split into this many parts per thread (the integrated
  * ones cluster in the highlight: small parts even the threads' work). */
@@ -13,11 +14,7 @@ enum { PARTS_PER_THREAD = 8 };
 
 static int parts_for(const fit_problem *p) {
   int threads = p->threads > 1 ? p->threads : 1;
-  return threads > 1 && p->count >= 1024 ? threads * PARTS_PER_THREAD : 1;
-}
-
-static size_t observation(const fit_problem *p, size_t i) {
-  return p->index ? p->index[i] : i;
+  return threads > 1 && p->rows.count >= 1024 ? threads * PARTS_PER_THREAD : 1;
 }
 
 static double angle_between(const double a[3], const double b[3]) {
@@ -64,7 +61,6 @@ static double pixel_turn(const cf_capture *capture, size_t k, double fallback, d
 /* Observations [begin, end) of choose_samples' adaptive S. */
 typedef struct choose_job {
   fit_problem *p;
-  const cf_capture *capture;
   const cf_fit_options *o;
   double width;
   int *samples;
@@ -75,21 +71,22 @@ typedef struct choose_job {
 static void choose_part(void *user, int part) {
   choose_job *job = user;
   fit_problem *p = job->p;
+  fit_rows *r = &p->rows;
   size_t begin, end;
-  cf_part_range(p->count, job->parts, part, &begin, &end);
-  double *scratch = job->scratch + 6 * (size_t)p->lights * (size_t)part;
-  const double *bound = p->turn_bound;
+  cf_part_range(r->count, job->parts, part, &begin, &end);
+  double *scratch = job->scratch + 6 * (size_t)r->lights * (size_t)part;
+  const double *bound = r->turn_bound;
   for (size_t i = begin; i < end; ++i) {
-    size_t k = observation(p, i);
+    size_t k = fit_rows_observation(r, i);
     double cos_h = cf_observation_specularity(p->obs, k);
     if (cos_h <= -1.0) continue; /* unlit */
     double theta_h = acos(fmin(1.0, cos_h)), delta_max = bound[p->obs->image[k]];
     /* the centre is enough even for a lobe of no width at the image's
      * largest turn (the bound grows with both): no turn to measure */
     if (cf_footprint_error(0.0, delta_max, theta_h, 1) <= job->o->footprint_tolerance) continue;
-    if (isnan(p->pixel_turn[i]))
-      p->pixel_turn[i] = pixel_turn(job->capture, k, delta_max, scratch, p->lights);
-    double delta = p->pixel_turn[i];
+    if (isnan(r->pixel_turn[i]))
+      r->pixel_turn[i] = pixel_turn(p->capture, k, delta_max, scratch, r->lights);
+    double delta = r->pixel_turn[i];
     int want = cf_footprint_samples(job->width, delta, theta_h, job->o->footprint_tolerance,
                                     CF_FIT_FOOTPRINT_MAX_SAMPLES);
     if (want > job->samples[i]) job->samples[i] = want;
@@ -97,29 +94,30 @@ static void choose_part(void *user, int part) {
 }
 
 /* The S each observation wants (only growing from `current`). */
-static cf_status choose_samples(fit_problem *p, const cf_capture *capture, const cf_fit_options *o,
-                                const int *current, int *samples, cf_error *err) {
-  for (size_t i = 0; i < p->count; ++i) samples[i] = current ? current[i] : 1;
+static cf_status choose_samples(fit_problem *p, const cf_fit_options *o, const int *current,
+                                int *samples, cf_error *err) {
+  fit_rows *r = &p->rows;
+  for (size_t i = 0; i < r->count; ++i) samples[i] = current ? current[i] : 1;
   if (o->footprint == 1) {
-    for (size_t i = 0; i < p->count; ++i) samples[i] = 1;
+    for (size_t i = 0; i < r->count; ++i) samples[i] = 1;
     return CF_OK;
   }
   if (o->footprint >= 2) {
-    for (size_t i = 0; i < p->count; ++i) samples[i] = o->footprint;
+    for (size_t i = 0; i < r->count; ++i) samples[i] = o->footprint;
     return CF_OK;
   }
-  double width = cf_model_lobe_width(p->model, p->params);
+  double width = cf_model_lobe_width(p->model, p->values.params);
   if (isinf(width)) return CF_OK;
   cf_status s = CF_OK;
-  if (!p->turn_bound) s = turn_bounds(capture, &p->turn_bound, err);
-  if (s == CF_OK && !p->pixel_turn) { /* measured as first needed */
-    p->pixel_turn = malloc((p->count ? p->count : 1) * sizeof *p->pixel_turn);
-    if (!p->pixel_turn) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-    for (size_t i = 0; s == CF_OK && i < p->count; ++i) p->pixel_turn[i] = NAN;
+  if (!r->turn_bound) s = turn_bounds(p->capture, &r->turn_bound, err);
+  if (s == CF_OK && !r->pixel_turn) { /* measured as first needed */
+    r->pixel_turn = malloc((r->count ? r->count : 1) * sizeof *r->pixel_turn);
+    if (!r->pixel_turn) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+    for (size_t i = 0; s == CF_OK && i < r->count; ++i) r->pixel_turn[i] = NAN;
   }
-  choose_job job = {p, capture, o, width, samples, parts_for(p), NULL};
+  choose_job job = {p, o, width, samples, parts_for(p), NULL};
   if (s == CF_OK &&
-      !(job.scratch = malloc(6 * (size_t)p->lights * (size_t)job.parts * sizeof *job.scratch)))
+      !(job.scratch = malloc(6 * (size_t)r->lights * (size_t)job.parts * sizeof *job.scratch)))
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) cf_parallel_for(job.parts, p->threads, choose_part, &job);
   free(job.scratch);
@@ -136,7 +134,6 @@ static double sample_offset(int gauss, int n, int j) {
 /* Observations [begin, end) of rebuild_pairs: their pairs at begin[i]. */
 typedef struct rebuild_job {
   const fit_problem *p;
-  const cf_capture *capture;
   const int *samples;
   int gauss;
   const size_t *begin;
@@ -150,18 +147,19 @@ static void rebuild_part(void *user, int part) {
   rebuild_job *job = user;
   const fit_problem *p = job->p;
   const cf_observations *o = p->obs;
-  const size_t lights = (size_t)p->lights;
+  const int light_count = p->rows.lights;
+  const size_t lights = (size_t)light_count;
   const int gauss = job->gauss;
   cf_geometry *geometry = job->geometry;
   double *weight = job->weight;
   size_t first, end;
-  cf_part_range(p->count, job->parts, part, &first, &end);
+  cf_part_range(p->rows.count, job->parts, part, &first, &end);
   double *scratch = job->scratch + 6 * lights * (size_t)part;
   for (size_t i = first; i < end; ++i) {
-    size_t k = observation(p, i), at = job->begin[i];
+    size_t k = fit_rows_observation(&p->rows, i), at = job->begin[i];
     int n = job->samples[i];
     if (n == 1) { /* the pixel centre */
-      fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
+      fit_pairs_at(light_count, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
                    o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
       continue;
     }
@@ -174,9 +172,9 @@ static void rebuild_part(void *user, int part) {
       for (int b = 0; b < n; ++b) {
         size_t pair = at + ((size_t)a * (size_t)n + (size_t)b) * lights;
         double du = sample_offset(gauss, n, b), dv = sample_offset(gauss, n, a);
-        if (cf_capture_footprint_at(job->capture, k, du, dv, normal, view, scratch,
+        if (cf_capture_footprint_at(p->capture, k, du, dv, normal, view, scratch,
                                     scratch + 3 * lights)) {
-          fit_pairs_at(p->lights, normal, view, scratch, scratch + 3 * lights, 1.0, geometry + pair,
+          fit_pairs_at(light_count, normal, view, scratch, scratch + 3 * lights, 1.0, geometry + pair,
                        weight + 3 * pair);
           ++hits;
         } else {
@@ -186,7 +184,7 @@ static void rebuild_part(void *user, int part) {
       }
     size_t count = (size_t)n * (size_t)n * lights;
     if (hits == 0) { /* fall back to the centre, with zero-weight padding */
-      fit_pairs_at(p->lights, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
+      fit_pairs_at(light_count, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
                    o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
       continue;
     }
@@ -195,15 +193,15 @@ static void rebuild_part(void *user, int part) {
 }
 
 /* Rebuild the pairs with samples[i]² points per observation. */
-static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *samples, int gauss,
-                               cf_error *err) {
-  const size_t lights = (size_t)p->lights;
-  size_t *begin = malloc((p->count + 1) * sizeof *begin);
+static cf_status rebuild_pairs(fit_problem *p, int *samples, int gauss, cf_error *err) {
+  fit_rows *r = &p->rows;
+  const size_t lights = (size_t)r->lights;
+  size_t *begin = malloc((r->count + 1) * sizeof *begin);
   if (!begin) return cf_error_set(err, CF_ENOMEM, "out of memory");
   begin[0] = 0;
-  for (size_t i = 0; i < p->count; ++i)
+  for (size_t i = 0; i < r->count; ++i)
     begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
-  size_t slots = begin[p->count];
+  size_t slots = begin[r->count];
   cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
   double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
   int parts = parts_for(p);
@@ -215,35 +213,36 @@ static cf_status rebuild_pairs(fit_problem *p, const cf_capture *capture, int *s
     free(scratch);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
   }
-  rebuild_job job = {p, capture, samples, gauss, begin, geometry, weight, parts, scratch};
+  rebuild_job job = {p, samples, gauss, begin, geometry, weight, parts, scratch};
   cf_parallel_for(parts, p->threads, rebuild_part, &job);
   free(scratch);
-  free(p->geometry);
-  free(p->weight);
-  free(p->slot_begin);
-  free(p->samples);
-  p->geometry = geometry;
-  p->weight = weight;
-  p->slot_begin = begin;
-  p->slots = slots;
-  p->samples = samples;
+  free(r->geometry);
+  free(r->weight);
+  free(r->slot_begin);
+  free(r->samples);
+  r->geometry = geometry;
+  r->weight = weight;
+  r->slot_begin = begin;
+  r->slots = slots;
+  r->samples = samples;
   return CF_OK;
 }
 
-cf_status fit_footprint_update(fit_problem *p, const cf_capture *capture,
-                               const cf_fit_options *options, int *changed, cf_error *err) {
+cf_status fit_footprint_update(fit_problem *p, const cf_fit_options *options, int *changed,
+                               cf_error *err) {
+  const fit_rows *r = &p->rows;
   if (changed) *changed = 0;
-  int *samples = malloc((p->count ? p->count : 1) * sizeof *samples);
+  int *samples = malloc((r->count ? r->count : 1) * sizeof *samples);
   if (!samples) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  cf_status s = choose_samples(p, capture, options, p->samples, samples, err);
+  cf_status s = choose_samples(p, options, r->samples, samples, err);
   int same = 1;
-  for (size_t i = 0; s == CF_OK && same && i < p->count; ++i)
-    same = samples[i] == (p->samples ? p->samples[i] : 1);
+  for (size_t i = 0; s == CF_OK && same && i < r->count; ++i)
+    same = samples[i] == (r->samples ? r->samples[i] : 1);
   if (s != CF_OK || same) {
     free(samples);
     return s;
   }
-  s = rebuild_pairs(p, capture, samples, options->footprint == 0, err); /* takes samples */
+  s = rebuild_pairs(p, samples, options->footprint == 0, err); /* takes samples */
   if (s != CF_OK) {
     free(samples);
     return s;
@@ -254,12 +253,13 @@ cf_status fit_footprint_update(fit_problem *p, const cf_capture *capture,
 
 void fit_footprint_tally(const fit_problem *p, size_t *observations, size_t *samples,
                          int *largest) {
+  const fit_rows *r = &p->rows;
   *observations = *samples = 0;
   *largest = 1;
-  for (size_t i = 0; p->samples && i < p->count; ++i) {
-    if (p->samples[i] < 2) continue;
+  for (size_t i = 0; r->samples && i < r->count; ++i) {
+    if (r->samples[i] < 2) continue;
     ++*observations;
-    *samples += (size_t)p->samples[i] * (size_t)p->samples[i];
-    if (p->samples[i] > *largest) *largest = p->samples[i];
+    *samples += (size_t)r->samples[i] * (size_t)r->samples[i];
+    if (r->samples[i] > *largest) *largest = r->samples[i];
   }
 }
