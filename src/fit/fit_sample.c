@@ -95,7 +95,10 @@ cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from
   if (s == CF_OK && n <= target) take_whole(from, sample);
   if (s == CF_OK && n > target) s = highlight_strata(obs, from, 0, stratum, err);
   if (s == CF_OK && n > target) {
-    size_t want[2] = {target / 4, target - target / 4};
+    /* a quarter for the highlights, one at least (below 4 a quarter is
+     * none, and their weight would be lost) */
+    size_t highlights = target / 4 > 0 ? target / 4 : target > 1;
+    size_t want[2] = {highlights, target - highlights};
     take_strata(from, stratum, want, capacity, sample);
   }
   free(stratum);

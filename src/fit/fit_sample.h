@@ -38,7 +38,8 @@ cf_status fit_population_of_images(const cf_capture *capture, const unsigned cha
 /* A weighted sample of about `target` observations of the population,
  * for the stages that work on a subsample (the highlights' stratum, the
  * 1/16 of the population whose half vector comes nearest the normal for
- * any light, gets a quarter: rare in a photo, they fix the lobes). A
+ * any light, gets a quarter, one at least: rare in a photo, they fix the
+ * lobes). A
  * population no larger than the target is taken whole, with weights 1. */
 cf_status fit_sample_draw(const cf_observations *obs, const fit_population *from, size_t target,
                           fit_sample *sample, cf_error *err);
