@@ -7,8 +7,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "../fit_plan.h"
-#include "../fit_problem.h"
+#include "fit_plan.h"
+#include "fit_problem.h"
 #include "lsq/lsq.h"
 
 double peers_now(void) {
