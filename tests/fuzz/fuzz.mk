@@ -51,7 +51,7 @@ endef
 $(foreach t,$(TARGETS),$(eval $(call link_target,$(t),-fsanitize=fuzzer $(SANITIZE))))
 $(foreach t,$(WRITERS),$(eval $(call link_target,$(t),-fsanitize=fuzzer-no-link $(SANITIZE))))
 
-$(OUT)/gen/tailed_grid_gen: src/model/gen/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
+$(OUT)/gen/tailed_grid_gen: tools/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
 	@mkdir -p $(@D)
 	$(CC) -std=c11 -O2 -ffp-contract=off -Iinclude -Isrc $(filter %.c,$^) -lm -o $@
 

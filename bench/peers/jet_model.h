@@ -7,8 +7,8 @@
 // of cf_geometry: tests/test_jet_clay.cpp checks one against the other, and
 // the peers benchmark (clayfit-peers) uses this as the idiomatic Ceres
 // model. Header-only, C++17.
-#ifndef CLAYFIT_FIT_PEERS_JET_MODEL_H
-#define CLAYFIT_FIT_PEERS_JET_MODEL_H
+#ifndef CLAYFIT_BENCH_PEERS_JET_MODEL_H
+#define CLAYFIT_BENCH_PEERS_JET_MODEL_H
 
 #include <cmath>
 
@@ -167,4 +167,4 @@ int Eval(cf_model_id id, const T *p, const Vec3<double> &n, const Vec3<double> &
 
 }  // namespace clayfit_jet
 
-#endif  // CLAYFIT_FIT_PEERS_JET_MODEL_H
+#endif  // CLAYFIT_BENCH_PEERS_JET_MODEL_H

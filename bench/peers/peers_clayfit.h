@@ -1,9 +1,9 @@
 /* clayfit's side of the peers benchmark (clayfit-peers): the common
  * problem solved through the fit's own C path (fit_problem.h over lsq.h),
  * the C evaluator's predictions for checking the peers' models and costs,
- * and the evaluator floor. Private to src/fit/peers. */
-#ifndef CLAYFIT_FIT_PEERS_CLAYFIT_H
-#define CLAYFIT_FIT_PEERS_CLAYFIT_H
+ * and the evaluator floor. Private to bench/peers. */
+#ifndef CLAYFIT_BENCH_PEERS_CLAYFIT_H
+#define CLAYFIT_BENCH_PEERS_CLAYFIT_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -55,4 +55,4 @@ double peers_now(void);
 }
 #endif
 
-#endif /* CLAYFIT_FIT_PEERS_CLAYFIT_H */
+#endif /* CLAYFIT_BENCH_PEERS_CLAYFIT_H */

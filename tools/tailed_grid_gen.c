@@ -3,8 +3,8 @@
  * h = g f and its derivatives in w and p = 1/(γ − 1), f = 1 − p/2.
  *   tailed_grid_gen OUT.c   writes the grid as C source,
  * at every build (src/model/CMakeLists.txt; tests/fuzz/fuzz.mk): the grid
- * is never stale and never in the tree. In gen/: tests/fuzz/fuzz.mk
- * compiles every .c file of src/model into the model. */
+ * is never stale and never in the tree. A program, not the library: out of
+ * src/model, whose every .c file tests/fuzz/fuzz.mk compiles into the model. */
 #include <stdio.h>
 #include <string.h>
 
@@ -39,7 +39,7 @@ static int write_grid(const char *path) {
   }
   static double row[CF_STD_TABLE_NODES][4];
   fprintf(out,
-          "/* Generated at build time by src/model/gen/tailed_grid_gen.c. The STD\n"
+          "/* Generated at build time by tools/tailed_grid_gen.c. The STD\n"
           " * masking's grid over gamma (tailed.h, docs/model.md 2.8 \"The table\"). */\n"
           "/* clang-format off */\n"
           "#include \"model/tailed.h\"\n\n"
