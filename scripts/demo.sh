@@ -54,7 +54,7 @@ fi
 
 echo
 echo "== clayfit bench eval (evaluator speed, one thread) =="
-"$clayfit" bench eval --min-time 0.5 | tee "$out/bench-eval.txt"
+"$clayfit" bench eval --min-time 0.1 | tee "$out/bench-eval.txt"
 
 echo
 echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the other side =="
