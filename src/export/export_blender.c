@@ -19,7 +19,6 @@
 #include <string.h>
 
 #include "export_internal.h"
-#include "model/terms.h"
 
 typedef struct blender_input {
   const char *name;

@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "clayfit/export.h"
+#include "clayfit/tailed_ggx.h"
 #include "core/text_escape.h"
 
 #define EXPORT_PI 3.14159265358979323846
@@ -74,65 +75,8 @@ double export_sigma_fujii(double sigma);
 double export_gtr1_width(double gloss);
 
 /* ---- a tailed lobe (STD, docs/model.md §2.8) in the GGX-only formats
- * (docs/presets.md, "Tailed lobes in GGX-only formats"): the GGX (r, F0)
- * of least squares over the hemisphere, weighted as a renderer sees it. */
-
-/* The Fresnel of both lobes: Schlick's (docs/model.md (8) of model
- * version 1) or the exact dielectric one from η = (1 + √F0)/(1 − √F0)
- * (terms.h, model version 2). EXPORT_FRESNEL_MODELS is the models' own. */
-typedef enum export_fresnel { EXPORT_FRESNEL_SCHLICK, EXPORT_FRESNEL_DIELECTRIC } export_fresnel;
-#if defined(CF_MODEL_VERSION) && CF_MODEL_VERSION >= 2
-#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_DIELECTRIC
-#else
-#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_SCHLICK
-#endif
-
-/* Gauss-Legendre nodes and weights on [0, 1], n of them (Newton on P_n from
- * the Chebyshev-like guess; Numerical Recipes' gauleg): the tailed lobe's
- * quadratures and their tests. */
-void export_gauss_legendre01(int n, double *x, double *w);
-
-/* Gauss-Legendre points: views (their elevation), θ_h, φ_h. The default
- * agrees with 128 × 192 × 64 points to 1.4e-4 relative in the loss and
- * 3.5e-5 in (r, F0), over r in [0.03, 1] and γ in [1.55, 1e6]
- * (docs/presets.md; tests/export/test_tailed_ggx.c doubles it). */
-typedef struct export_tail_quadrature {
-  int views, thetas, phis;
-} export_tail_quadrature;
-#define EXPORT_TAIL_QUADRATURE \
-  { 32, 32, 12 }
-
-typedef struct export_tail_fit {
-  double r, f0;      /* the GGX fitted */
-  double rms_loss;   /* relative RMS of the fitted GGX over the lobe */
-  double naive_loss; /* the same for GGX with the tailed lobe's own (r, F0) */
-  int iterations;    /* Levenberg-Marquardt's */
-  size_t nodes;      /* quadrature points where c_i > 0 */
-} export_tail_fit;
-
-/* The fit with a chosen Fresnel, quadrature and start (NULL: the tailed
- * lobe's (r, F0)). r and F0 in the parameter table's ranges, γ > 1.5 and
- * finite; else CF_ERANGE with the reason. */
-cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel fresnel,
-                              const export_tail_quadrature *q, const double start[2],
-                              export_tail_fit *out, cf_error *err);
-
-/* What the exporters call: the models' Fresnel, the default quadrature; in
- * air (M2T's lobe, M4T's film). */
-cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_ggx, double *f0_ggx,
-                                 double *rms_loss, cf_error *err);
-
-/* M4's base lobe, seen from outside through the film (F0 film_f0, optical
- * depth tau: M4's mean over the channels) at the refracted directions: the
- * same least squares with the lobe's directions inside the film's critical
- * cone, weighted as an outside pixel sees them (export_mapping.c, tail_film).
- * film_f0 and tau in the parameter table's ranges, else CF_ERANGE. */
-cf_status export_tail_fit_ggx_film(double r, double gamma, double f0, double film_f0, double tau,
-                                   export_fresnel fresnel, const export_tail_quadrature *q,
-                                   const double start[2], export_tail_fit *out, cf_error *err);
-cf_status export_ggx_from_tailed_film(double r, double gamma, double f0, double film_f0, double tau,
-                                      double *r_ggx, double *f0_ggx, double *rms_loss,
-                                      cf_error *err);
+ * (docs/presets.md, "Tailed lobes in GGX-only formats"): the GGX of least
+ * squares (clayfit/tailed_ggx.h, clayfit_model_fit) and its note. */
 
 /* "GGX approximation: 6.1 % RMS over the lobe" (below 0.05 %: "< 0.1 %"),
  * the one wording of every preset. */
@@ -168,7 +112,7 @@ cf_status export_fit_diffuse_colour(const cf_fit_file *fit, export_diffuse_basis
  * left. */
 cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *roughness,
                               double *loss, cf_error *err);
-/* A tailed lobe of the fit and the GGX written for it (export_ggx_from_tailed). */
+/* A tailed lobe of the fit and the GGX written for it (cf_tailed_ggx_default). */
 typedef struct export_tailed_lobe {
   char name[192]; /* for the note: "the specular lobe" */
   double r, f0;   /* the fit's */
@@ -177,8 +121,8 @@ typedef struct export_tailed_lobe {
 
 /* The fitted material, read off a fit by model. A tailed model (M2T, M4T)
  * is read as its GGX twin: `model` is the twin, every roughness and F0
- * below the GGX of its lobe (export_ggx_from_tailed; M4T's base under the
- * film, export_ggx_from_tailed_film); `info` stays the fitted model's,
+ * below the GGX of its lobe (cf_tailed_ggx_default; M4T's base under the
+ * film); `info` stays the fitted model's,
  * `lobes` the tailed lobes with their losses (export_common_notes notes
  * each). */
 typedef struct export_material {
