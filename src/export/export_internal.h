@@ -1,6 +1,7 @@
-/* What the export formats share: a growing text buffer, the notes each
- * file carries (what maps exactly, approximately, what is dropped), and
- * the physics of the mapping (export_mapping.c). Private to src/export. */
+/* What the export formats share: the physics of the mapping
+ * (export_mapping.c), and, from the layer below (src/shader/preset_text.h),
+ * the text, the notes and the provenance of every material file. Private to
+ * src/export. */
 #ifndef CLAYFIT_EXPORT_INTERNAL_H
 #define CLAYFIT_EXPORT_INTERNAL_H
 
@@ -9,54 +10,9 @@
 #include "clayfit/export.h"
 #include "clayfit/tailed_ggx.h"
 #include "core/text_escape.h"
+#include "shader/preset_text.h"
 
 #define EXPORT_PI 3.14159265358979323846
-
-/* ---- text ---- */
-typedef struct export_text {
-  char *data;
-  size_t size, capacity;
-  int failed; /* out of memory */
-} export_text;
-
-void export_printf(export_text *t, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-/* Untrusted text (a name, a path: from fit.json or the command line)
- * escaped for the file's syntax (core/text_escape.h). */
-void export_escaped(export_text *t, text_escape_fn escape, const char *text);
-/* Write the text to path and free it. */
-cf_status export_text_write(export_text *t, const char *path, cf_error *err);
-void export_text_free(export_text *t);
-
-/* ---- notes ---- */
-typedef enum export_note_kind {
-  EXPORT_EXACT,   /* the target computes what the model does */
-  EXPORT_APPROX,  /* the target's term differs (how, in the note) */
-  EXPORT_DROPPED, /* the target has no such term */
-  EXPORT_RANGE    /* a value outside the target's range: also a warning */
-} export_note_kind;
-
-enum { EXPORT_MAX_NOTES = 40 };
-
-typedef struct export_notes {
-  int count;
-  export_note_kind kind[EXPORT_MAX_NOTES];
-  char text[EXPORT_MAX_NOTES][512];
-  cf_export_warnings *warnings; /* may be NULL */
-  const char *format_name;
-} export_notes;
-
-void export_note(export_notes *n, export_note_kind kind, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-/* The notes as comment lines, each starting with `prefix` (and `suffix`
- * at the end of the line, for block comments that need it). */
-void export_notes_write(export_text *t, const export_notes *n, const char *prefix);
 
 /* ---- the physics ---- */
 /* η = (1 + √F0)/(1 − √F0) (docs/model.md (7)) and back. */
@@ -84,7 +40,7 @@ void export_ggx_loss_text(double rms_loss, char *text, size_t size);
 /* The note of a tailed lobe (`lobe` names it: "the specular lobe"): its
  * (r, γ, F0), the GGX written and the loss. At γ = 2 (GGX itself, the
  * mapping the identity) an exact note with a loss of 0. */
-void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
+void export_note_tailed(preset_notes *n, const char *lobe, double r, double gamma, double f0,
                         double r_ggx, double f0_ggx, double rms_loss);
 
 /* ---- the diffuse colour a target's diffuse needs (docs/presets.md) ----
@@ -147,32 +103,19 @@ typedef struct export_material {
 /* CF_ENOMEM / CF_ENUMERIC from the GGX fit of a tailed lobe. */
 cf_status export_material_from_fit(const cf_fit_file *fit, export_material *m, cf_error *err);
 
-/* Three lines of provenance: clayfit version, fit file, model, capture;
- * every line starts with `prefix`, and the text from fit.json and the fit
- * file's path are escaped with `escape` (the syntax of a comment, or
- * text_escape_utf8 for a JSON string). */
-void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                       const char *prefix, text_escape_fn escape);
-
 /* The common notes: roughness convention, σ and the film's colour. */
-void export_common_notes(export_notes *n, const export_material *m);
+void export_common_notes(preset_notes *n, const export_material *m);
 
 /* The writers, one file each. */
 cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_mtlx(const cf_fit_file *fit, const char *fit_path, const char *path, int openpbr,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const char *path,
-                         export_notes *notes, cf_error *err);
+                         preset_notes *notes, cf_error *err);
 cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const char *path,
-                         export_notes *notes, cf_error *err);
-/* The exact model as shaders (export_shader*.c, docs/shaders.md): a three.js
- * ES module; a Unity folder (path: the folder, created). */
-cf_status export_glsl(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
-cf_status export_unity(const cf_fit_file *fit, const char *fit_path, const char *path,
-                       export_notes *notes, cf_error *err);
+                         preset_notes *notes, cf_error *err);
 
 #endif /* CLAYFIT_EXPORT_INTERNAL_H */

@@ -1,5 +1,5 @@
 /* The physics of the mapping from the models of docs/model.md §3 to the targets'
- * inputs, and what the writers share (export_internal.h). */
+ * inputs (export_internal.h). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -8,107 +8,6 @@
 
 #include "core/file.h"
 #include "export_internal.h"
-
-/* ---- text ---- */
-
-void export_printf(export_text *t, const char *format, ...) {
-  if (t->failed) return;
-  for (;;) {
-    va_list args;
-    va_start(args, format);
-    size_t room = t->capacity - t->size;
-    int n = vsnprintf(t->data ? t->data + t->size : NULL, t->data ? room : 0, format, args);
-    va_end(args);
-    if (n < 0) {
-      t->failed = 1;
-      return;
-    }
-    if (t->data && (size_t)n < room) {
-      t->size += (size_t)n;
-      return;
-    }
-    size_t capacity = t->capacity ? t->capacity * 2 : 4096;
-    while (capacity < t->size + (size_t)n + 1) capacity *= 2;
-    char *grown = realloc(t->data, capacity);
-    if (!grown) {
-      t->failed = 1;
-      return;
-    }
-    t->data = grown;
-    t->capacity = capacity;
-  }
-}
-
-void export_escaped(export_text *t, text_escape_fn escape, const char *text) {
-  if (t->failed) return;
-  char *escaped = text_escape_alloc(escape, text);
-  if (!escaped) {
-    t->failed = 1;
-    return;
-  }
-  export_printf(t, "%s", escaped);
-  free(escaped);
-}
-
-void export_text_free(export_text *t) {
-  free(t->data);
-  t->data = NULL;
-  t->size = t->capacity = 0;
-}
-
-cf_status export_text_write(export_text *t, const char *path, cf_error *err) {
-  cf_status s = t->failed ? cf_error_set(err, CF_ENOMEM, "%s: out of memory", path)
-                          : cf_write_file(path, t->data ? t->data : "", t->size, err);
-  export_text_free(t);
-  return s;
-}
-
-/* ---- notes ---- */
-
-void export_note(export_notes *n, export_note_kind kind, const char *format, ...) {
-  char text[512];
-  va_list args;
-  va_start(args, format);
-  vsnprintf(text, sizeof text, format, args);
-  va_end(args);
-  if (n->count < EXPORT_MAX_NOTES) {
-    n->kind[n->count] = kind;
-    memcpy(n->text[n->count], text, sizeof text);
-    ++n->count;
-  }
-  if (kind == EXPORT_RANGE && n->warnings && n->warnings->count < CF_EXPORT_MAX_WARNINGS) {
-    snprintf(n->warnings->text[n->warnings->count], sizeof n->warnings->text[0], "%s: %s",
-             n->format_name ? n->format_name : "export", text);
-    ++n->warnings->count;
-  }
-}
-
-void export_notes_write(export_text *t, const export_notes *n, const char *prefix) {
-  static const char *const heading[] = {"maps exactly", "maps approximately", "dropped",
-                                        "outside the target's range"};
-  for (int kind = 0; kind < 4; ++kind) {
-    int any = 0;
-    for (int i = 0; i < n->count; ++i) {
-      if ((int)n->kind[i] != kind) continue;
-      if (!any) export_printf(t, "%s%s:\n", prefix, heading[kind]);
-      any = 1;
-      /* wrap at about 90 columns */
-      const char *s = n->text[i];
-      int first = 1;
-      while (*s) {
-        size_t len = strlen(s), cut = len;
-        if (len > 84) {
-          cut = 84;
-          while (cut > 20 && s[cut] != ' ') --cut;
-        }
-        export_printf(t, "%s%s%.*s\n", prefix, first ? "  - " : "    ", (int)cut, s);
-        s += cut;
-        while (*s == ' ') ++s;
-        first = 0;
-      }
-    }
-  }
-}
 
 /* ---- physics ---- */
 
@@ -225,32 +124,8 @@ cf_status export_material_from_fit(const cf_fit_file *fit, export_material *m, c
   return s;
 }
 
-void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                       const char *prefix, text_escape_fn escape) {
-  const cf_model_info *m = cf_model_info_get(fit->result.model);
-  export_printf(t, "%sclayfit %s material preset: model %s (%s), fitted by clayfit ", prefix,
-                CLAYFIT_EXPORT_VERSION, m->code, m->name);
-  export_escaped(t, escape, fit->clayfit_version);
-  export_printf(t, " on ");
-  export_escaped(t, escape, fit->created);
-  export_printf(t, "\n%sfit: ", prefix);
-  export_escaped(t, escape, fit_path ? fit_path : "(not given)");
-  export_printf(t, "; capture: ");
-  export_escaped(t, escape, fit->capture_name);
-  export_printf(t, " (");
-  export_escaped(t, escape, fit->radiometry);
-  export_printf(t, " radiometry, ");
-  export_escaped(t, escape, fit->capture_path);
-  export_printf(t, "); relative RMSE %.4g\n", fit->result.relative_rmse);
-  export_printf(t,
-                "%smodel: docs/model.md of clayfit %s, model version %d%s; mapping: "
-                "docs/presets.md\n",
-                prefix, CLAYFIT_EXPORT_VERSION, fit->model_version,
-                fit->model_version < CF_MODEL_VERSION ? " (fitted with Schlick's Fresnel)" : "");
-}
-
-void export_common_notes(export_notes *n, const export_material *m) {
-  export_note(n, EXPORT_EXACT,
+void export_common_notes(preset_notes *n, const export_material *m) {
+  preset_note(n, PRESET_EXACT,
               "albedo %.6g, %.6g, %.6g (linear RGB) -> the diffuse colour; clayfit's "
               "roughness is perceptual (GGX alpha = r^2): each target's convention is given "
               "with its input below",
@@ -262,7 +137,7 @@ void export_common_notes(export_notes *n, const export_material *m) {
                        lobe->rms_loss);
   }
   if (m->model == CF_MODEL_CLAY)
-    export_note(n, EXPORT_APPROX,
+    preset_note(n, PRESET_APPROX,
                 "film optical depth tau %.6g, %.6g, %.6g -> coat colour exp(-2 tau) = %.6g, "
                 "%.6g, %.6g, the film's round-trip transmittance at normal incidence; no target "
                 "models absorption along the refracted paths exp(-tau (1/c_i' + 1/c_o')) nor "
@@ -270,7 +145,7 @@ void export_common_notes(export_notes *n, const export_material *m) {
                 m->tau[0], m->tau[1], m->tau[2], m->transmittance[0], m->transmittance[1],
                 m->transmittance[2]);
   if (m->model == CF_MODEL_CLAY)
-    export_note(n, EXPORT_APPROX,
+    preset_note(n, PRESET_APPROX,
                 "base_f0 %.6g is the film-to-clay reflectance: relative IOR %.6g; the clay's "
                 "IOR in air is film IOR x relative IOR = %.6g x %.6g = %.6g",
                 m->base_f0, m->base_ior_rel, m->film_ior, m->base_ior_rel, m->base_ior_abs);
@@ -288,17 +163,17 @@ void export_ggx_loss_text(double rms_loss, char *text, size_t size) {
     snprintf(text, size, "GGX approximation: %.1f %% RMS over the lobe", 100.0 * rms_loss);
 }
 
-void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
+void export_note_tailed(preset_notes *n, const char *lobe, double r, double gamma, double f0,
                         double r_ggx, double f0_ggx, double rms_loss) {
   char loss[96];
   export_ggx_loss_text(rms_loss, loss, sizeof loss);
   if (gamma == 2.0) {
-    export_note(n, EXPORT_EXACT,
+    preset_note(n, PRESET_EXACT,
                 "%s: tail gamma 2 is GGX: roughness %.6g, F0 %.6g written as they are; %s", lobe, r,
                 f0, loss);
     return;
   }
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "%s: tailed (roughness %.6g, tail gamma %.6g, F0 %.6g) -> the GGX of least "
               "squares as a renderer sees it (docs/presets.md): roughness %.6g, F0 %.6g; %s",
               lobe, r, gamma, f0, r_ggx, f0_ggx, loss);
