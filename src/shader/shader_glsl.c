@@ -1,11 +1,11 @@
 /* three.js: an ES module with a GLSL ES 3.0 ShaderMaterial that evaluates
- * the fitted model exactly (the shared body of export_shader.c), the fitted
+ * the fitted model exactly (the shared body of shader.c), the fitted
  * values as uniforms, point and directional lights as uniforms, linear
  * radiance out (docs/shaders.md). The module imports nothing: the page
  * passes its THREE, so it works with any bundling of three.js. */
 #include <stdio.h>
 
-#include "export_shader.h"
+#include "shader_internal.h"
 
 enum { MAX_LIGHTS = 8 };
 
@@ -111,52 +111,40 @@ static const char fragment_main[] =
     "  clayfitFragColor = vec4(radiance * clayfitExposure, 1.0);\n"
     "}\n";
 
-static void uniform_float(export_text *t, const char *name, double value) {
-  export_printf(t, "    %s: { value: %.9g },\n", name, value);
+static void uniform_float(preset_text *t, const char *name, double value) {
+  preset_printf(t, "    %s: { value: %.9g },\n", name, value);
 }
 
-static void uniform_vec3(export_text *t, const char *name, const double *x) {
-  export_printf(t, "    %s: { value: new THREE.Vector3(%.9g, %.9g, %.9g) },\n", name, x[0], x[1],
+static void uniform_vec3(preset_text *t, const char *name, const double *x) {
+  preset_printf(t, "    %s: { value: new THREE.Vector3(%.9g, %.9g, %.9g) },\n", name, x[0], x[1],
                 x[2]);
 }
 
-/* The parameter table's default (docs/model.md §1.6). */
-static double table_default(cf_param_id id) {
-  return cf_param_info_get(id)->default_value;
-}
-
 /* The fitted values; the parameters a rung does not have keep the table's
- * defaults (unused by its code). */
-static void write_uniforms(export_text *t, const export_material *m) {
-  int rung = export_shader_rung(m), interface = rung == 2 || rung == 3;
-  double tau = table_default(CF_PARAM_OPTICAL_DEPTH), tau_default[3] = {tau, tau, tau};
+ * defaults (shader_material_read; unused by its code). */
+static void write_uniforms(preset_text *t, const shader_material *m) {
   uniform_vec3(t, "clayfitAlbedo", m->albedo);
   uniform_float(t, "clayfitDiffuseRoughness", m->sigma);
-  uniform_float(t, "clayfitRoughness",
-                interface ? m->roughness : table_default(CF_PARAM_ROUGHNESS));
-  uniform_float(t, "clayfitF0", interface ? m->f0 : table_default(CF_PARAM_F0));
-  uniform_float(t, "clayfitCoatWeight",
-                rung == 3 ? m->coat_weight : table_default(CF_PARAM_COAT_WEIGHT));
-  uniform_float(t, "clayfitCoatGloss",
-                rung == 3 ? m->coat_gloss : table_default(CF_PARAM_COAT_GLOSS));
-  uniform_float(t, "clayfitFilmRoughness",
-                rung == 4 ? m->film_roughness : table_default(CF_PARAM_FILM_ROUGHNESS));
-  uniform_float(t, "clayfitFilmF0", rung == 4 ? m->film_f0 : table_default(CF_PARAM_FILM_F0));
-  uniform_vec3(t, "clayfitOpticalDepth", rung == 4 ? m->tau : tau_default);
-  uniform_float(t, "clayfitBaseRoughness",
-                rung == 4 ? m->base_roughness : table_default(CF_PARAM_BASE_ROUGHNESS));
-  uniform_float(t, "clayfitBaseF0", rung == 4 ? m->base_f0 : table_default(CF_PARAM_BASE_F0));
+  uniform_float(t, "clayfitRoughness", m->roughness);
+  uniform_float(t, "clayfitF0", m->f0);
+  uniform_float(t, "clayfitCoatWeight", m->coat_weight);
+  uniform_float(t, "clayfitCoatGloss", m->coat_gloss);
+  uniform_float(t, "clayfitFilmRoughness", m->film_roughness);
+  uniform_float(t, "clayfitFilmF0", m->film_f0);
+  uniform_vec3(t, "clayfitOpticalDepth", m->tau);
+  uniform_float(t, "clayfitBaseRoughness", m->base_roughness);
+  uniform_float(t, "clayfitBaseF0", m->base_f0);
   uniform_float(t, "clayfitTail", m->tail);
 }
 
-static void write_module(export_text *t, const export_material *m) {
-  export_printf(t, "export const clayfit = { model: \"%s\", tail: %.9g, maxLights: %d };\n\n",
+static void write_module(preset_text *t, const shader_material *m) {
+  preset_printf(t, "export const clayfit = { model: \"%s\", tail: %.9g, maxLights: %d };\n\n",
                 m->info->code, m->tail, MAX_LIGHTS);
-  export_printf(t, "export const vertexShader = `%s`;\n\n", vertex_shader);
-  export_printf(t, "export const fragmentShader = `");
-  export_shader_library(t, EXPORT_SHADER_GLSL, m);
-  export_printf(t, "\n%s`;\n\n", fragment_main);
-  export_printf(t,
+  preset_printf(t, "export const vertexShader = `%s`;\n\n", vertex_shader);
+  preset_printf(t, "export const fragmentShader = `");
+  shader_library(t, SHADER_GLSL, m);
+  preset_printf(t, "\n%s`;\n\n", fragment_main);
+  preset_printf(t,
                 "// The fitted values and the lights as three.js uniforms.\n"
                 "export function clayfitUniforms(THREE) {\n"
                 "  const positions = [], intensities = [];\n"
@@ -167,7 +155,7 @@ static void write_module(export_text *t, const export_material *m) {
                 "  return {\n",
                 MAX_LIGHTS);
   write_uniforms(t, m);
-  export_printf(t,
+  preset_printf(t,
                 "    clayfitExposure: { value: 1 },\n"
                 "    clayfitLightCount: { value: 0 },\n"
                 "    clayfitLightPosition: { value: positions },\n"
@@ -178,7 +166,7 @@ static void write_module(export_text *t, const export_material *m) {
                 "    clayfitCameraToWorld: { value: new THREE.Matrix4() },\n"
                 "  };\n"
                 "}\n\n");
-  export_printf(
+  preset_printf(
       t,
       "// options.lights: up to %d of { position: [x, y, z], intensity: [r, g, b] } (a\n"
       "// point light, intensity in W/sr) or { direction: [x, y, z], irradiance: [r, g, b] };\n"
@@ -222,15 +210,14 @@ static void write_module(export_text *t, const export_material *m) {
       MAX_LIGHTS, MAX_LIGHTS, MAX_LIGHTS, MAX_LIGHTS, m->info->code);
 }
 
-cf_status export_glsl(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err) {
-  export_material m;
-  cf_status s = export_material_from_fit(fit, &m, err);
-  if (s != CF_OK) return s;
-  export_shader_exact(&m);
-  export_text t = {0};
-  export_provenance(&t, fit, fit_path, "// ", text_escape_python_comment);
-  export_printf(&t,
+cf_status shader_glsl(const cf_fit_file *fit, const char *fit_path, const char *path,
+                      cf_error *err) {
+  shader_material m;
+  shader_material_read(fit, &m);
+  preset_notes notes = {0};
+  preset_text t = {0};
+  preset_provenance(&t, fit, fit_path, "// ", text_escape_python_comment);
+  preset_printf(&t,
                 "// A three.js ShaderMaterial (GLSL ES 3.0) evaluating this model exactly\n"
                 "// (docs/shaders.md). Usage, with three.js as THREE:\n"
                 "//   import { createClayfitMaterial } from './this-file.js';\n"
@@ -238,12 +225,12 @@ cf_status export_glsl(const cf_fit_file *fit, const char *fit_path, const char *
                 "//     lights: [{ position: [0, 2, 5], intensity: [40, 40, 40] }] });\n"
                 "// Output: linear radiance (no tone mapping, no sRGB encoding): render into\n"
                 "// a float target, or add your own tone mapping.\n");
-  export_shader_notes(notes, &m,
-                      "lighting: point and directional lights as uniforms (at most 8), no "
-                      "image-based lighting or shadows; linear radiance out, which the page "
-                      "tone-maps and encodes as it chooses");
-  export_notes_write(&t, notes, "// ");
-  export_printf(&t, "\n");
+  shader_notes(&notes, &m,
+               "lighting: point and directional lights as uniforms (at most 8), no "
+               "image-based lighting or shadows; linear radiance out, which the page "
+               "tone-maps and encodes as it chooses");
+  preset_notes_write(&t, &notes, "// ");
+  preset_printf(&t, "\n");
   write_module(&t, &m);
-  return export_text_write(&t, path, err);
+  return preset_text_write(&t, path, err);
 }

@@ -9,7 +9,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "export_shader.h"
+#include "shader_internal.h"
 
 static const char glsl_prelude[] =
     "// GLSL ES 3.0 prelude: the shared body's HLSL vector types\n"
@@ -338,54 +338,83 @@ static const char *const shared_body[] = {
     "// ---- clayfit shared body: end\n",
 };
 
-int export_shader_rung(const export_material *m) {
-  switch (m->model) {
+/* The fit's value of entry `component` of parameter `id`, or the parameter
+ * table's default when the model has no such parameter. */
+static double fitted(const cf_fit_file *fit, cf_param_id id, int component) {
+  const cf_model_info *info = cf_model_info_get(fit->result.model);
+  for (int k = 0; k < info->param_count; ++k)
+    if (info->params[k] == id) return fit->result.params[info->offsets[k] + component];
+  return cf_param_info_get(id)->default_value;
+}
+
+void shader_material_read(const cf_fit_file *fit, shader_material *m) {
+  memset(m, 0, sizeof *m);
+  m->info = cf_model_info_get(fit->result.model);
+  switch (m->info->ggx_twin) { /* a tailed model is its GGX twin with the tail */
     case CF_MODEL_LAMBERT:
-      return 0;
+      m->rung = 0;
+      break;
     case CF_MODEL_OREN_NAYAR:
-      return 1;
+      m->rung = 1;
+      break;
     case CF_MODEL_DIELECTRIC:
-      return 2;
+      m->rung = 2;
+      break;
     case CF_MODEL_CLEARCOAT:
-      return 3;
+      m->rung = 3;
+      break;
     default:
-      return 4; /* M4 (a tailed model is read as its GGX twin) */
+      m->rung = 4;
   }
+  m->tailed = m->info->tail_slot >= 0;
+  m->tail = fitted(fit, CF_PARAM_TAIL, 0);
+  for (int c = 0; c < 3; ++c) {
+    m->albedo[c] = fitted(fit, CF_PARAM_ALBEDO, c);
+    m->tau[c] = fitted(fit, CF_PARAM_OPTICAL_DEPTH, c);
+  }
+  m->sigma = fitted(fit, CF_PARAM_DIFFUSE_ROUGHNESS, 0);
+  m->roughness = fitted(fit, CF_PARAM_ROUGHNESS, 0);
+  m->f0 = fitted(fit, CF_PARAM_F0, 0);
+  m->coat_weight = fitted(fit, CF_PARAM_COAT_WEIGHT, 0);
+  m->coat_gloss = fitted(fit, CF_PARAM_COAT_GLOSS, 0);
+  m->film_roughness = fitted(fit, CF_PARAM_FILM_ROUGHNESS, 0);
+  m->film_f0 = fitted(fit, CF_PARAM_FILM_F0, 0);
+  m->base_roughness = fitted(fit, CF_PARAM_BASE_ROUGHNESS, 0);
+  m->base_f0 = fitted(fit, CF_PARAM_BASE_F0, 0);
 }
 
-void export_shader_library(export_text *t, export_shader_lang lang, const export_material *m) {
-  export_printf(t, "#define CLAYFIT_MODEL %d\n#define CLAYFIT_TAILED %d\n", export_shader_rung(m),
-                m->lobe_count > 0);
-  export_printf(t, "%s", lang == EXPORT_SHADER_GLSL ? glsl_prelude : hlsl_prelude);
+void shader_library(preset_text *t, shader_lang lang, const shader_material *m) {
+  preset_printf(t, "#define CLAYFIT_MODEL %d\n#define CLAYFIT_TAILED %d\n", m->rung, m->tailed);
+  preset_printf(t, "%s", lang == SHADER_GLSL ? glsl_prelude : hlsl_prelude);
   for (size_t i = 0; i < sizeof shared_body / sizeof shared_body[0]; ++i)
-    export_printf(t, "%s", shared_body[i]);
+    preset_printf(t, "%s", shared_body[i]);
 }
 
-void export_shader_exact(export_material *m) {
-  if (m->lobe_count == 0) return;
-  if (m->model == CF_MODEL_DIELECTRIC) {
-    m->roughness = m->lobes[0].r;
-    m->f0 = m->lobes[0].f0;
-  } else if (m->model == CF_MODEL_CLAY && m->lobe_count == 2) {
-    m->film_roughness = m->lobes[0].r;
-    m->film_f0 = m->lobes[0].f0;
-    m->base_roughness = m->lobes[1].r;
-    m->base_f0 = m->lobes[1].f0;
-  }
-}
-
-void export_shader_notes(export_notes *n, const export_material *m, const char *lighting) {
-  export_note(n, EXPORT_EXACT,
+void shader_notes(preset_notes *n, const shader_material *m, const char *lighting) {
+  preset_note(n, PRESET_EXACT,
               "%s: the model's own formulas (docs/model.md §2, §3), every term as the fit "
               "evaluates it, not a mapping; in 32-bit floats (docs/shaders.md)",
               m->info->code);
-  if (m->lobe_count > 0)
-    export_note(n, EXPORT_EXACT,
+  if (m->tailed)
+    preset_note(n, PRESET_EXACT,
                 "tail gamma %.6g: every lobe is STD's (docs/model.md §2.8, §3.8), its D (T1) "
                 "and masking (T4) evaluated in the shader (the incomplete beta function by its "
                 "continued fraction), not a GGX approximation",
                 m->tail);
-  export_note(n, EXPORT_APPROX, "%s", lighting);
+  preset_note(n, PRESET_APPROX, "%s", lighting);
+}
+
+cf_status cf_shader_write(const cf_fit_file *fit, const char *fit_path, cf_shader_format format,
+                          const char *path, cf_error *err) {
+  cf_status s = cf_params_check(fit->result.model, fit->result.params, err);
+  if (s != CF_OK) return s;
+  switch (format) {
+    case CF_SHADER_GLSL:
+      return shader_glsl(fit, fit_path, path, err);
+    case CF_SHADER_UNITY:
+      return shader_unity(fit, fit_path, path, err);
+  }
+  return cf_error_set(err, CF_EINVAL, "unknown shader format %d", (int)format);
 }
 
 /* FNV-1a, 64 bits, from a chosen basis. */
@@ -397,7 +426,7 @@ static uint64_t fnv1a(const unsigned char *data, size_t size, uint64_t hash) {
   return hash;
 }
 
-void export_shader_guid(const char *text, size_t size, const char *salt, char guid[33]) {
+void shader_hash_guid(const char *text, size_t size, const char *salt, char guid[33]) {
   static const char hex[] = "0123456789abcdef";
   uint64_t h[2] = {0xcbf29ce484222325ULL, 0x84222325cbf29ce4ULL};
   for (int k = 0; k < 2; ++k) {

@@ -1,6 +1,6 @@
 /* Unity's built-in render pipeline: a folder for Assets/ holding a
  * ShaderLab shader (HLSL, CGPROGRAM) that evaluates the fitted model
- * exactly (the shared body of export_shader.c), a material with the fitted
+ * exactly (the shared body of shader.c), a material with the fitted
  * values, and their .meta files, whose GUIDs are hashes of the content
  * (the same fit gives the same GUIDs; the material names its shader's).
  * Forward rendering: the ForwardBase pass takes the main directional
@@ -9,22 +9,22 @@
 #include <string.h>
 
 #include "core/file.h"
-#include "export_shader.h"
+#include "shader_internal.h"
 
 /* Properties: Vector for RGB values (a Color would be converted from sRGB
  * in a linear-space project), Range for scalars (the parameter table's). */
 /* A scalar property with the parameter table's range (docs/model.md §1.6). */
-static void property_range(export_text *t, const char *property, const char *label, cf_param_id id,
+static void property_range(preset_text *t, const char *property, const char *label, cf_param_id id,
                            double value) {
   const cf_param_info *p = cf_param_info_get(id);
-  export_printf(t, "    %s (\"%s\", Range(%.9g, %.9g)) = %.9g\n", property, label, p->lower,
+  preset_printf(t, "    %s (\"%s\", Range(%.9g, %.9g)) = %.9g\n", property, label, p->lower,
                 p->upper, value);
 }
 
-static void properties(export_text *t, const export_material *m) {
-  int rung = export_shader_rung(m);
-  export_printf(t, "  Properties {\n");
-  export_printf(t, "    _Albedo (\"albedo (linear RGB)\", Vector) = (%.9g, %.9g, %.9g, 0)\n",
+static void properties(preset_text *t, const shader_material *m) {
+  int rung = m->rung;
+  preset_printf(t, "  Properties {\n");
+  preset_printf(t, "    _Albedo (\"albedo (linear RGB)\", Vector) = (%.9g, %.9g, %.9g, 0)\n",
                 m->albedo[0], m->albedo[1], m->albedo[2]);
   if (rung >= 1)
     property_range(t, "_DiffuseRoughness", "diffuse_roughness (rad)", CF_PARAM_DIFFUSE_ROUGHNESS,
@@ -41,15 +41,15 @@ static void properties(export_text *t, const export_material *m) {
     property_range(t, "_FilmRoughness", "film_roughness", CF_PARAM_FILM_ROUGHNESS,
                    m->film_roughness);
     property_range(t, "_FilmF0", "film_f0", CF_PARAM_FILM_F0, m->film_f0);
-    export_printf(t,
+    preset_printf(t,
                   "    _OpticalDepth (\"optical_depth (RGB)\", Vector) = (%.9g, %.9g, %.9g, 0)\n",
                   m->tau[0], m->tau[1], m->tau[2]);
     property_range(t, "_BaseRoughness", "base_roughness", CF_PARAM_BASE_ROUGHNESS,
                    m->base_roughness);
     property_range(t, "_BaseF0", "base_f0", CF_PARAM_BASE_F0, m->base_f0);
   }
-  if (m->lobe_count > 0) property_range(t, "_Tail", "tail (gamma)", CF_PARAM_TAIL, m->tail);
-  export_printf(t, "    _Exposure (\"exposure\", Float) = 1\n  }\n");
+  if (m->tailed) property_range(t, "_Tail", "tail (gamma)", CF_PARAM_TAIL, m->tail);
+  preset_printf(t, "    _Exposure (\"exposure\", Float) = 1\n  }\n");
 }
 
 /* The glue after the shared body: the properties into cf_params, and the
@@ -116,26 +116,26 @@ static const char unity_glue[] =
     "}\n"
     "// ---- clayfit Unity glue: end\n";
 
-static void shader_text(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                        const export_material *m, export_notes *notes, const char *tag) {
-  export_provenance(t, fit, fit_path, "// ", text_escape_python_comment);
-  export_printf(t,
+static void shader_text(preset_text *t, const cf_fit_file *fit, const char *fit_path,
+                        const shader_material *m, preset_notes *notes, const char *tag) {
+  preset_provenance(t, fit, fit_path, "// ", text_escape_python_comment);
+  preset_printf(t,
                 "// Unity built-in render pipeline, forward rendering (docs/shaders.md): the\n"
                 "// fitted model evaluated exactly, in linear radiance; use a linear colour\n"
                 "// space project.\n");
-  export_notes_write(t, notes, "// ");
-  export_printf(t, "Shader \"clayfit/%s %s\" {\n", m->info->code, tag);
+  preset_notes_write(t, notes, "// ");
+  preset_printf(t, "Shader \"clayfit/%s %s\" {\n", m->info->code, tag);
   properties(t, m);
-  export_printf(t,
+  preset_printf(t,
                 "  SubShader {\n"
                 "    Tags { \"RenderType\" = \"Opaque\" }\n"
                 "    CGINCLUDE\n"
                 "    #include \"UnityCG.cginc\"\n"
                 "    #include \"AutoLight.cginc\"\n"
                 "    #include \"Lighting.cginc\"\n");
-  export_shader_library(t, EXPORT_SHADER_HLSL, m);
-  export_printf(t, "%s", unity_glue);
-  export_printf(t,
+  shader_library(t, SHADER_HLSL, m);
+  preset_printf(t, "%s", unity_glue);
+  preset_printf(t,
                 "    ENDCG\n"
                 "    Pass {\n"
                 "      Tags { \"LightMode\" = \"ForwardBase\" }\n"
@@ -160,19 +160,19 @@ static void shader_text(export_text *t, const cf_fit_file *fit, const char *fit_
                 "}\n");
 }
 
-static void mat_float(export_text *t, const char *name, double value) {
-  export_printf(t, "    - %s: %.9g\n", name, value);
+static void mat_float(preset_text *t, const char *name, double value) {
+  preset_printf(t, "    - %s: %.9g\n", name, value);
 }
 
-static void mat_vector(export_text *t, const char *name, const double *x) {
-  export_printf(t, "    - %s: {r: %.9g, g: %.9g, b: %.9g, a: 0}\n", name, x[0], x[1], x[2]);
+static void mat_vector(preset_text *t, const char *name, const double *x) {
+  preset_printf(t, "    - %s: {r: %.9g, g: %.9g, b: %.9g, a: 0}\n", name, x[0], x[1], x[2]);
 }
 
 /* Unity's YAML serialisation of a Material (class 21, fileID 2100000). */
-static void material_text(export_text *t, const export_material *m, const char *name,
+static void material_text(preset_text *t, const shader_material *m, const char *name,
                           const char *shader_guid) {
-  int rung = export_shader_rung(m);
-  export_printf(t,
+  int rung = m->rung;
+  preset_printf(t,
                 "%%YAML 1.1\n%%TAG !u! tag:unity3d.com,2011:\n--- !u!21 &2100000\n"
                 "Material:\n  serializedVersion: 6\n  m_ObjectHideFlags: 0\n"
                 "  m_CorrespondingSourceObject: {fileID: 0}\n  m_PrefabInstance: {fileID: 0}\n"
@@ -198,66 +198,65 @@ static void material_text(export_text *t, const export_material *m, const char *
     mat_float(t, "_BaseRoughness", m->base_roughness);
     mat_float(t, "_BaseF0", m->base_f0);
   }
-  if (m->lobe_count > 0) mat_float(t, "_Tail", m->tail);
+  if (m->tailed) mat_float(t, "_Tail", m->tail);
   mat_float(t, "_Exposure", 1.0);
-  export_printf(t, "    m_Colors:\n");
+  preset_printf(t, "    m_Colors:\n");
   mat_vector(t, "_Albedo", m->albedo);
   if (rung == 4) mat_vector(t, "_OpticalDepth", m->tau);
 }
 
-static void meta_text(export_text *t, const char *guid, const char *importer) {
-  export_printf(t, "fileFormatVersion: 2\nguid: %s\n%s:\n  externalObjects: {}\n", guid, importer);
+static void meta_text(preset_text *t, const char *guid, const char *importer) {
+  preset_printf(t, "fileFormatVersion: 2\nguid: %s\n%s:\n  externalObjects: {}\n", guid, importer);
   if (strcmp(importer, "ShaderImporter") == 0)
-    export_printf(t, "  defaultTextures: []\n  nonModifiableTextures: []\n");
+    preset_printf(t, "  defaultTextures: []\n  nonModifiableTextures: []\n");
   else
-    export_printf(t, "  mainObjectFileID: 2100000\n");
-  export_printf(t, "  userData: \n  assetBundleName: \n  assetBundleVariant: \n");
+    preset_printf(t, "  mainObjectFileID: 2100000\n");
+  preset_printf(t, "  userData: \n  assetBundleName: \n  assetBundleVariant: \n");
 }
 
 /* dir/name, written; t freed. */
-static cf_status write_in(export_text *t, const char *dir, const char *name, cf_error *err) {
+static cf_status write_in(preset_text *t, const char *dir, const char *name, cf_error *err) {
   char path[4096];
   cf_status s = cf_path_join(dir, name, path, sizeof path, err);
   if (s != CF_OK) {
-    export_text_free(t);
+    preset_text_free(t);
     return s;
   }
-  return export_text_write(t, path, err);
+  return preset_text_write(t, path, err);
 }
 
-cf_status export_unity(const cf_fit_file *fit, const char *fit_path, const char *path,
-                       export_notes *notes, cf_error *err) {
-  export_material m;
-  cf_status s = export_material_from_fit(fit, &m, err);
-  if (s != CF_OK) return s;
-  export_shader_exact(&m);
-  export_shader_notes(notes, &m,
-                      "lighting: Unity's forward lights (ForwardBase, ForwardAdd) with their "
-                      "attenuation and shadows, E = pi x light colour x attenuation; no ambient "
-                      "or reflection probes; linear radiance out, which the camera tone-maps as "
-                      "it is set up");
+cf_status shader_unity(const cf_fit_file *fit, const char *fit_path, const char *path,
+                       cf_error *err) {
+  shader_material m;
+  shader_material_read(fit, &m);
+  preset_notes notes = {0};
+  shader_notes(&notes, &m,
+               "lighting: Unity's forward lights (ForwardBase, ForwardAdd) with their "
+               "attenuation and shadows, E = pi x light colour x attenuation; no ambient "
+               "or reflection probes; linear radiance out, which the camera tone-maps as "
+               "it is set up");
   /* the shader's tag and GUID hash its material's values and the notes,
    * not the provenance: the same material gives the same files */
-  export_text key = {0};
-  export_printf(&key, "%s", m.info->code);
-  for (int i = 0; i < CF_MAX_DIM; ++i) export_printf(&key, " %.17g", fit->result.params[i]);
-  for (int i = 0; i < notes->count; ++i) export_printf(&key, "\n%s", notes->text[i]);
+  preset_text key = {0};
+  preset_printf(&key, "%s", m.info->code);
+  for (int i = 0; i < CF_MAX_DIM; ++i) preset_printf(&key, " %.17g", fit->result.params[i]);
+  for (int i = 0; i < notes.count; ++i) preset_printf(&key, "\n%s", notes.text[i]);
   if (key.failed) {
-    export_text_free(&key);
+    preset_text_free(&key);
     return cf_error_set(err, CF_ENOMEM, "%s: out of memory", path);
   }
   char shader_guid[33], mat_guid[33], tag[9], name[32];
-  export_shader_guid(key.data, key.size, "clayfit.shader", shader_guid);
-  export_shader_guid(key.data, key.size, "clayfit.mat", mat_guid);
-  export_text_free(&key);
+  shader_hash_guid(key.data, key.size, "clayfit.shader", shader_guid);
+  shader_hash_guid(key.data, key.size, "clayfit.mat", mat_guid);
+  preset_text_free(&key);
   memcpy(tag, shader_guid, 8);
   tag[8] = '\0';
   snprintf(name, sizeof name, "clayfit %s %s", m.info->code, tag);
 
-  s = cf_make_dirs(path, err);
-  export_text t = {0};
+  cf_status s = cf_make_dirs(path, err);
+  preset_text t = {0};
   if (s == CF_OK) {
-    shader_text(&t, fit, fit_path, &m, notes, tag);
+    shader_text(&t, fit, fit_path, &m, &notes, tag);
     s = write_in(&t, path, "clayfit.shader", err);
   }
   if (s == CF_OK) {

@@ -2,10 +2,10 @@
  * GGX-only formats"). The model sees the base's lobe through the film: at
  * the refracted directions inside the critical cone, scaled by
  * T(c_i) T(c_o) a_tau / eta1^2 (docs/model.md (30)). The exporter fits its
- * GGX there (export_ggx_from_tailed_film). This measures, in the model
- * itself (cf_eval of M4 and M4T), the relative RMS over the base's lobe as an
- * outside pixel sees it ((c_i df)^2 dw_i c_o dw_o, the mapping's metric) of
- *   - the GGX fitted as if in air (export_ggx_from_tailed),
+ * GGX there (cf_tailed_ggx_default with the film, include/clayfit/tailed_ggx.h). This measures, in
+ * the model itself (cf_eval of M4 and M4T), the relative RMS over the base's lobe as an outside
+ * pixel sees it ((c_i df)^2 dw_i c_o dw_o, the mapping's metric) of
+ *   - the GGX fitted as if in air (cf_tailed_ggx_default without the film),
  *   - the GGX fitted under the film (what is exported),
  *   - the best GGX in the model (Nelder-Mead from the exported one).
  * The base's lobe alone is the model at albedo 0 (no diffuse) minus the same
@@ -22,7 +22,7 @@
 #include <time.h>
 
 #include "clayfit/model.h"
-#include "export/export_internal.h"
+#include "clayfit/tailed_ggx.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
@@ -46,9 +46,9 @@ static node nodes[MAX_NODES];
  * it over [0, π] twice (the plane of incidence is a mirror plane). */
 static int build_nodes(const quad *q, double s) {
   double xo[64], wo[64], xd[160], wd[160], xb[128], wb[128];
-  export_gauss_legendre01(q->views, xo, wo);
-  export_gauss_legendre01(q->deltas, xd, wd);
-  export_gauss_legendre01(q->betas, xb, wb);
+  cf_gauss_legendre01(q->views, xo, wo);
+  cf_gauss_legendre01(q->deltas, xd, wd);
+  cf_gauss_legendre01(q->betas, xb, wb);
   int count = 0;
   for (int a = 0; a < q->views; ++a) {
     double psi = 0.5 * PI * xo[a], c_o = sin(psi), s_o = cos(psi);
@@ -177,12 +177,14 @@ static measured measure(const material *mat, const quad *q, int search) {
   measured out;
   memset(&out, 0, sizeof out);
   cf_error err = {0};
+  const double film[2] = {mat->film_f0, mat->tau};
+  cf_tailed_ggx air, under;
   CHECK(
-      export_ggx_from_tailed(mat->base_r, mat->tail, mat->base_f0, &out.air[0], &out.air[1],
-                             &out.air[2], &err) == CF_OK &&
-          export_ggx_from_tailed_film(mat->base_r, mat->tail, mat->base_f0, mat->film_f0, mat->tau,
-                                      &out.film[0], &out.film[1], &out.film[2], &err) == CF_OK,
+      cf_tailed_ggx_default(mat->base_r, mat->tail, mat->base_f0, NULL, &air, &err) == CF_OK &&
+          cf_tailed_ggx_default(mat->base_r, mat->tail, mat->base_f0, film, &under, &err) == CF_OK,
       "%s: %s", mat->name, err.message);
+  out.air[0] = air.r, out.air[1] = air.f0, out.air[2] = air.rms_loss;
+  out.film[0] = under.r, out.film[1] = under.f0, out.film[2] = under.rms_loss;
   /* the sharper lobe sets the scale of the lights' quadrature */
   double amin = fmin(mat->film_r * mat->film_r, mat->base_r * mat->base_r);
   problem pr = {0};
@@ -245,13 +247,13 @@ int main(void) {
   int calls = 0;
   for (int rep = 0; rep < 4; ++rep)
     for (size_t i = 0; i < sizeof mats / sizeof mats[0]; ++i, ++calls) {
-      double r, f0, l;
+      const double film[2] = {mats[i].film_f0, mats[i].tau};
+      cf_tailed_ggx ggx;
       cf_error err = {0};
-      export_ggx_from_tailed_film(mats[i].base_r, mats[i].tail, mats[i].base_f0, mats[i].film_f0,
-                                  mats[i].tau, &r, &f0, &l, &err);
+      cf_tailed_ggx_default(mats[i].base_r, mats[i].tail, mats[i].base_f0, film, &ggx, &err);
     }
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
-  printf("export_ggx_from_tailed_film: %.0f us of CPU a call (mean of %d calls)\n",
+  printf("cf_tailed_ggx_default under the film: %.0f us of CPU a call (mean of %d calls)\n",
          1e6 * ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / calls,
          calls);
   printf(
