@@ -1,4 +1,5 @@
-/* What is left in a fit's highlight cores (docs/cores.md): the photos'
+/* What is left in a fit's highlight cores
+ * (docs/studies/2026-11-26-highlight-cores.md): the photos'
  * noise floor measured without any model, the radial profile of the
  * prediction and the photo through each core, and the point-spread-
  * function test (the prediction convolved with a narrow core plus a

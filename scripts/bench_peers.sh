@@ -19,12 +19,12 @@ build="${1:-$root/build/release}"
 python=/usr/bin/python3
 [ -x "$python" ] || python="$(command -v python3)"
 
-if [ ! -x "$build/src/fit/peers/clayfit-peers" ] || [ ! -x "$build/src/cli/clayfit" ]; then
+if [ ! -x "$build/bench/peers/clayfit-peers" ] || [ ! -x "$build/src/cli/clayfit" ]; then
   cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCLAYFIT_WERROR=ON >/dev/null
   cmake --build "$build" -j2 --target clayfit clayfit-peers
 fi
 clayfit="$build/src/cli/clayfit"
-peers="$build/src/fit/peers/clayfit-peers"
+peers="$build/bench/peers/clayfit-peers"
 out="$root/out/bench_peers"
 mkdir -p "$out" "$root/bench"
 

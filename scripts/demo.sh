@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# The main job on a fresh Debian 12 machine: installs what is missing,
-# builds in Release, and runs clayfit on its built-in default capture.
+# The main job on a fresh Debian 12 machine: installs what is missing of
+# what the demo needs (scripts/install-deps.sh demo: the compiler, CMake and
+# the libraries clayfit links), builds the clayfit program in Release
+# (scripts/build.sh demo), and runs clayfit on its built-in default capture.
+# The test command (scripts/test.sh) installs and builds the rest.
 #
 # Today (issues 2 to 4): render the default synthetic capture (16 photos of
 # wet clay, model M4, with their COLMAP model), load it and draw the pixels
@@ -11,8 +14,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-bash scripts/install-deps.sh
-bash scripts/build.sh release
+bash scripts/install-deps.sh demo
+installed=$SECONDS
+bash scripts/build.sh demo
+built=$SECONDS
 clayfit=build/release/src/cli/clayfit
 out=out/demo
 rm -rf "$out"
@@ -42,10 +47,14 @@ ls "$out/presets"
 echo
 echo "== clayfit report: photo, re-rendering and residual of every image, plots (open report/index.html) =="
 "$clayfit" report "$out/fit/fit.json" -o "$out/report"
+if [ ! -f "$(dirname "$clayfit")/clayfit-report-viewer.js" ]; then
+  echo "(the report's interactive three.js view is not built by the demo: it needs Node.js and npm"
+  echo " packages; bash scripts/install-deps.sh test, then bash scripts/build.sh release, build it)"
+fi
 
 echo
 echo "== clayfit bench eval (evaluator speed, one thread) =="
-"$clayfit" bench eval --min-time 0.5 | tee "$out/bench-eval.txt"
+"$clayfit" bench eval --min-time 0.1 | tee "$out/bench-eval.txt"
 
 echo
 echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the other side =="
@@ -54,4 +63,5 @@ echo "== clayfit eval: default wet clay (M4), light 30 deg, view 20 deg on the o
 head -c 600 "$out/eval-clay.json"
 echo "..."
 echo
+echo "demo: installed in $installed s, built in $((built - installed)) s, ran in $((SECONDS - built)) s"
 echo "demo: outputs in $out/ (capture/, inspect/ overlays, fit/fit.json, presets/, report/index.html, bench-eval.txt, eval-clay.json)"

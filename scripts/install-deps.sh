@@ -1,14 +1,32 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages clayfit needs, only those not installed.
+# Installs the Debian 12 packages clayfit needs, only those not installed:
+#   scripts/install-deps.sh demo   what the demo builds and runs with: the
+#                                  compiler, CMake and the libraries clayfit
+#                                  links (scripts/demo.sh)
+#   scripts/install-deps.sh [test] those, and everything the tests use
+#                                  (scripts/test.sh), npm packages included
 # Runs as root, or through sudo when available.
 set -euo pipefail
 
+kind=${1:-test}
+case "$kind" in
+  demo|test) ;;
+  *) echo "usage: scripts/install-deps.sh [demo|test]" >&2; exit 2 ;;
+esac
+
+# The demo's: what `scripts/build.sh demo` compiles and links, nothing more.
 packages=(
-  build-essential cmake pkg-config   # compiler, build
+  g++ make cmake pkg-config          # compiler, build
   libjansson-dev                     # JSON (CLI output, capture files)
   libceres-dev                       # fitting (and ceres::Jet in the tests)
-  libopenimageio-dev openimageio-tools  # every image read and written
-  libopencv-dev                      # image analysis (sphere detection)
+  libopenimageio-dev                 # every image read and written
+  libopencv-core-dev libopencv-imgproc-dev  # image analysis (sphere detection; cmake/FindOpenCV.cmake)
+  libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
+)
+# The tests' (and the benchmarks'): every real component a test runs.
+test_packages=(
+  openimageio-tools                  # oiiotool: images made and compared in the tests and scripts
+  libopencv-imgcodecs-dev            # the DiLiGenT mask read in test_sphere_diligent
   colmap                             # camera poses (integration tests)
   python3 python3-jsonschema         # test harness: JSON Schema validation
   python3-numpy python3-scipy        # the SciPy peer (scripts/peer_scipy.py, bench_peers.sh)
@@ -17,14 +35,18 @@ packages=(
   libxml2-utils                      # xmllint: the MaterialX and Mitsuba presets' tests
   glslang-tools                      # glslangValidator: the GLSL and Unity (HLSL) shader presets' tests
   blender                            # Blender 3.4: the Blender preset rendered (tests/export/blender.cmake)
-  libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
   slurm-wlm munge                    # the tests' private Slurm cluster (scripts/slurm-local.sh)
 )
+if [ "$kind" = test ]; then
+  packages+=("${test_packages[@]}")
+fi
 # Node.js and npm for the Khronos glTF validator (npm gltf-validator), from
 # Debian unless a node and an npm are already there (another Node.js, such
 # as NodeSource's, bundles npm and conflicts with Debian's npm package).
-command -v node >/dev/null || packages+=(nodejs)
-command -v npm >/dev/null || packages+=(npm)
+if [ "$kind" = test ]; then
+  command -v node >/dev/null || packages+=(nodejs)
+  command -v npm >/dev/null || packages+=(npm)
+fi
 
 # The Khronos glTF validator for the glTF preset's tests, from the npm
 # registry into the project's build/tools/node_modules (tests/export), only
@@ -65,10 +87,15 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+install_npm_packages() {
+  if [ "$kind" = test ]; then
+    install_gltf_validator
+    install_three
+  fi
+}
 if ((${#missing[@]} == 0)); then
-  echo "install-deps: all ${#packages[@]} packages present"
-  install_gltf_validator
-  install_three
+  echo "install-deps: all ${#packages[@]} packages present ($kind)"
+  install_npm_packages
   exit 0
 fi
 
@@ -91,5 +118,4 @@ if [[ " ${missing[*]} " =~ \ (munge|slurm-wlm)\  ]] && [ ! -e "$policy" ]; then
 fi
 "${sudo[@]}" apt-get update -qq
 DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
-install_gltf_validator
-install_three
+install_npm_packages

@@ -1,7 +1,7 @@
 // An independent check of the C evaluator's M4 (clay) and M2 (dielectric):
 // the models written a second time, straight from docs/model.md's vector
 // formulas (refracted direction vectors l', v', half vectors, the textbook
-// forms of D and ON), templated on the scalar (src/fit/peers/jet_model.h,
+// forms of D and ON), templated on the scalar (bench/peers/jet_model.h,
 // shared with the peers benchmark) and differentiated by ceres::Jet
 // (forward-mode automatic differentiation). Values and all derivatives
 // must agree with cf_eval's closed-form gradient.
@@ -16,7 +16,7 @@ extern "C" {
 #include "core/rng.h"
 }
 
-#include "../src/fit/peers/jet_model.h"
+#include "../bench/peers/jet_model.h"
 
 namespace {
 

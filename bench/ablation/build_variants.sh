@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# The solver's ablation (docs/solver.md): builds `clayfit` once per device
-# switched off, from the commit the ablation measured with the switches of
-# lsq_ablate.patch (LSQ_ABLATE, a bit per device), into OUT/<name>/clayfit.
+# The solver's ablation (docs/studies/2026-11-26-solver-ablation.md): builds
+# `clayfit` once per device switched off, from the commit the ablation
+# measured with the switches of lsq_ablate.patch (LSQ_ABLATE, a bit per
+# device), into OUT/<name>/clayfit.
 #   bash bench/ablation/build_variants.sh OUT
 # Needs the project's dependencies (scripts/install-deps.sh); takes a few
 # minutes (one Release build, then lsq_ceres.cpp once per variant).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 out="$(mkdir -p "$1" && cd "$1" && pwd)"
-commit=af576d6  # the solver as measured (docs/solver.md)
+commit=af576d6  # the solver as measured (docs/studies/2026-11-26-solver-ablation.md)
 tree="$out/tree"
 [ -d "$tree" ] || git -C "$root" worktree add --detach "$tree" "$commit"
 git -C "$tree" apply --check "$root/bench/ablation/lsq_ablate.patch" 2>/dev/null &&

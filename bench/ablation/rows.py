@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""The solver's ablation (docs/solver.md): `clayfit fit` on the bench rows with
-two binaries in alternating runs, A B A B ..., and per row the medians of the
-wall and CPU times (user + system of the process), of their ratios A/B taken
+"""The solver's ablation (docs/studies/2026-11-26-solver-ablation.md):
+`clayfit fit` on the bench rows with two binaries in alternating runs,
+A B A B ..., and per row the medians of the wall and CPU times (user +
+system of the process), of their ratios A/B taken
 pair by pair, and each binary's iterations, final cost and relative RMSE.
 
 usage: rows.py A B PAIRS --work DIR --demo CAPTURE [--diligent CAPTURE]

@@ -19,7 +19,8 @@
  * No target has every term of the models of docs/model.md §3: each file says in a
  * comment which parameters map exactly, which approximately and what is
  * dropped, and every value a target cannot take is a warning (never
- * silently clamped). The mapping is in src/export/export_mapping.c. */
+ * silently clamped). The mapping is in src/export/export_mapping.c; glsl and
+ * unity are written by the shader layer (clayfit/shader.h). */
 #ifndef CLAYFIT_EXPORT_H
 #define CLAYFIT_EXPORT_H
 

@@ -126,6 +126,85 @@ static cf_status read_list(const char *path, const json_at *at, cf_capture_spec 
   return CF_OK;
 }
 
+/* The image names: exactly one of 'files' (the names) and 'list' (a list
+ * file, read_list). */
+static cf_status read_image_names(const json_t *images, const json_at *here, cf_capture_spec *spec,
+                                  cf_error *err) {
+  const json_t *files = NULL;
+  const char *list = NULL;
+  int has_files = 0, has_list = 0;
+  cf_status s = json_get_array(images, here, "files", 0, &files, &has_files, err);
+  if (s == CF_OK) s = json_get_string(images, here, "list", 0, &list, &has_list, err);
+  if (s == CF_OK && has_files == has_list)
+    s = json_fail(here, err, CF_EPARSE, "give exactly one of 'files' and 'list'");
+  if (s != CF_OK) return s;
+  if (has_list) {
+    json_at list_at = json_member_at(here, "list");
+    char *list_path = NULL;
+    s = resolve(spec->dir, list, &list_at, &list_path, err);
+    if (s == CF_OK) s = read_list(list_path, &list_at, spec, err);
+    spec->image_list = list_path;
+    return s;
+  }
+  json_at files_at = json_member_at(here, "files");
+  spec->num_images = json_array_size(files);
+  if (spec->num_images == 0 || spec->num_images > MAX_IMAGES)
+    s = json_fail(&files_at, err, CF_EPARSE, "needs 1 to %d image names, has %zu", MAX_IMAGES,
+                  spec->num_images);
+  if (s == CF_OK && !(spec->image_names = calloc(spec->num_images, sizeof(char *))))
+    s = out_of_memory(err);
+  for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i) {
+    json_at element = json_element_at(&files_at, i);
+    const char *name;
+    s = json_as_string(json_array_get(files, i), &element, &name, err);
+    if (s == CF_OK && !name[0]) s = json_fail(&element, err, CF_EPARSE, "empty file name");
+    if (s == CF_OK && !(spec->image_names[i] = copy_string(name))) s = out_of_memory(err);
+  }
+  return s;
+}
+
+/* exposures: one per image, when given */
+static cf_status read_exposures(const json_t *images, const json_at *here, cf_capture_spec *spec,
+                                cf_error *err) {
+  const json_t *exposures = NULL;
+  int has_exposures = 0;
+  cf_status s = json_get_array(images, here, "exposures", 0, &exposures, &has_exposures, err);
+  if (s != CF_OK || !has_exposures) return s;
+  json_at exp_at = json_member_at(here, "exposures");
+  if (json_array_size(exposures) != spec->num_images)
+    s = json_fail(&exp_at, err, CF_EPARSE, "has %zu exposures for %zu images",
+                  json_array_size(exposures), spec->num_images);
+  if (s == CF_OK && !(spec->exposures = malloc(spec->num_images * sizeof(double))))
+    s = out_of_memory(err);
+  for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i) {
+    json_at element = json_element_at(&exp_at, i);
+    s = json_as_number(json_array_get(exposures, i), &element, 1e-300, 1e300, &spec->exposures[i],
+                       err);
+  }
+  return s;
+}
+
+/* masks: one for all images, or a folder with the images' names */
+static cf_status read_masks(const json_t *images, const json_at *here, cf_capture_spec *spec,
+                            cf_error *err) {
+  const char *mask = NULL, *masks = NULL;
+  int has_mask = 0, has_masks = 0;
+  cf_status s = json_get_string(images, here, "mask", 0, &mask, &has_mask, err);
+  if (s == CF_OK) s = json_get_string(images, here, "masks", 0, &masks, &has_masks, err);
+  if (s == CF_OK && has_mask && has_masks)
+    s = json_fail(here, err, CF_EPARSE, "give at most one of 'mask' and 'masks'");
+  if (s != CF_OK || !(has_mask || has_masks)) return s;
+  if (!(spec->mask_paths = calloc(spec->num_images, sizeof(char *)))) s = out_of_memory(err);
+  char *mask_dir = NULL;
+  json_at mask_at = json_member_at(here, has_mask ? "mask" : "masks");
+  if (s == CF_OK && has_masks) s = resolve(spec->dir, masks, &mask_at, &mask_dir, err);
+  for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i)
+    s = has_mask ? resolve(spec->dir, mask, &mask_at, &spec->mask_paths[i], err)
+                 : resolve(mask_dir, spec->image_names[i], &mask_at, &spec->mask_paths[i], err);
+  free(mask_dir);
+  return s;
+}
+
 static cf_status read_images(const json_t *root, const json_at *at, cf_capture_spec *spec,
                              cf_error *err) {
   const json_t *images;
@@ -143,76 +222,13 @@ static cf_status read_images(const json_t *root, const json_at *at, cf_capture_s
   json_at dir_at = json_member_at(&here, "directory");
   if ((s = resolve(spec->dir, directory, &dir_at, &image_dir, err)) != CF_OK) return s;
 
-  const json_t *files = NULL;
-  const char *list = NULL;
-  int has_files = 0, has_list = 0;
-  s = json_get_array(images, &here, "files", 0, &files, &has_files, err);
-  if (s == CF_OK) s = json_get_string(images, &here, "list", 0, &list, &has_list, err);
-  if (s == CF_OK && has_files == has_list)
-    s = json_fail(&here, err, CF_EPARSE, "give exactly one of 'files' and 'list'");
-  if (s == CF_OK && has_files) {
-    json_at files_at = json_member_at(&here, "files");
-    spec->num_images = json_array_size(files);
-    if (spec->num_images == 0 || spec->num_images > MAX_IMAGES)
-      s = json_fail(&files_at, err, CF_EPARSE, "needs 1 to %d image names, has %zu", MAX_IMAGES,
-                    spec->num_images);
-    if (s == CF_OK && !(spec->image_names = calloc(spec->num_images, sizeof(char *))))
-      s = out_of_memory(err);
-    for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i) {
-      json_at element = json_element_at(&files_at, i);
-      const char *name;
-      s = json_as_string(json_array_get(files, i), &element, &name, err);
-      if (s == CF_OK && !name[0]) s = json_fail(&element, err, CF_EPARSE, "empty file name");
-      if (s == CF_OK && !(spec->image_names[i] = copy_string(name))) s = out_of_memory(err);
-    }
-  } else if (s == CF_OK) {
-    json_at list_at = json_member_at(&here, "list");
-    char *list_path = NULL;
-    s = resolve(spec->dir, list, &list_at, &list_path, err);
-    if (s == CF_OK) s = read_list(list_path, &list_at, spec, err);
-    spec->image_list = list_path;
-  }
+  s = read_image_names(images, &here, spec, err);
   if (s == CF_OK && !(spec->image_paths = calloc(spec->num_images, sizeof(char *))))
     s = out_of_memory(err);
   for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i)
     s = resolve(image_dir, spec->image_names[i], &here, &spec->image_paths[i], err);
-
-  /* exposures */
-  const json_t *exposures = NULL;
-  int has_exposures = 0;
-  if (s == CF_OK)
-    s = json_get_array(images, &here, "exposures", 0, &exposures, &has_exposures, err);
-  if (s == CF_OK && has_exposures) {
-    json_at exp_at = json_member_at(&here, "exposures");
-    if (json_array_size(exposures) != spec->num_images)
-      s = json_fail(&exp_at, err, CF_EPARSE, "has %zu exposures for %zu images",
-                    json_array_size(exposures), spec->num_images);
-    if (s == CF_OK && !(spec->exposures = malloc(spec->num_images * sizeof(double))))
-      s = out_of_memory(err);
-    for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i) {
-      json_at element = json_element_at(&exp_at, i);
-      s = json_as_number(json_array_get(exposures, i), &element, 1e-300, 1e300, &spec->exposures[i],
-                         err);
-    }
-  }
-
-  /* masks: one for all images, or a folder with the images' names */
-  const char *mask = NULL, *masks = NULL;
-  int has_mask = 0, has_masks = 0;
-  if (s == CF_OK) s = json_get_string(images, &here, "mask", 0, &mask, &has_mask, err);
-  if (s == CF_OK) s = json_get_string(images, &here, "masks", 0, &masks, &has_masks, err);
-  if (s == CF_OK && has_mask && has_masks)
-    s = json_fail(&here, err, CF_EPARSE, "give at most one of 'mask' and 'masks'");
-  if (s == CF_OK && (has_mask || has_masks)) {
-    if (!(spec->mask_paths = calloc(spec->num_images, sizeof(char *)))) s = out_of_memory(err);
-    char *mask_dir = NULL;
-    json_at mask_at = json_member_at(&here, has_mask ? "mask" : "masks");
-    if (s == CF_OK && has_masks) s = resolve(spec->dir, masks, &mask_at, &mask_dir, err);
-    for (size_t i = 0; s == CF_OK && i < spec->num_images; ++i)
-      s = has_mask ? resolve(spec->dir, mask, &mask_at, &spec->mask_paths[i], err)
-                   : resolve(mask_dir, spec->image_names[i], &mask_at, &spec->mask_paths[i], err);
-    free(mask_dir);
-  }
+  if (s == CF_OK) s = read_exposures(images, &here, spec, err);
+  if (s == CF_OK) s = read_masks(images, &here, spec, err);
   free(image_dir);
   return s;
 }
@@ -358,6 +374,112 @@ static cf_status read_unit_vector(const json_t *object, const json_at *at, const
   return CF_OK;
 }
 
+static cf_status read_flash(const json_t *item, const json_at *at, cf_capture_spec *spec,
+                            cf_light_spec *light, cf_error *err) {
+  static const char *const keys[] = {"type", "offset", "offset_m", "intensity", NULL};
+  int has_offset = 0, has_metres = 0;
+  cf_status s;
+  light->kind = CF_LIGHT_SPEC_SINGLE;
+  light->light.kind = CF_LIGHT_FLASH;
+  if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
+      (s = json_get_numbers(item, at, "offset", 0, 3, -1e300, 1e300, light->light.position,
+                            &has_offset, err)) != CF_OK ||
+      (s = json_get_numbers(item, at, "offset_m", 0, 3, -1e300, 1e300, light->light.position,
+                            &has_metres, err)) != CF_OK ||
+      (s = json_get_numbers(item, at, "intensity", 1, 3, 0.0, 1e300, light->light.intensity, NULL,
+                            err)) != CF_OK)
+    return s;
+  if (has_offset == has_metres)
+    return json_fail(at, err, CF_EPARSE, "give exactly one of 'offset' and 'offset_m'");
+  if (has_metres && !isfinite(spec->sphere_radius_m))
+    return json_fail(at, err, CF_EPARSE, "'offset_m' needs scale.sphere_radius_m");
+  light->offset_in_metres = has_metres;
+  return CF_OK;
+}
+
+static cf_status read_point(const json_t *item, const json_at *at, cf_light_spec *light,
+                            cf_error *err) {
+  static const char *const keys[] = {"type", "position", "intensity", NULL};
+  cf_status s;
+  light->kind = CF_LIGHT_SPEC_SINGLE;
+  light->light.kind = CF_LIGHT_POINT;
+  if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
+      (s = json_get_numbers(item, at, "position", 1, 3, -1e300, 1e300, light->light.position, NULL,
+                            err)) != CF_OK)
+    return s;
+  return json_get_numbers(item, at, "intensity", 1, 3, 0.0, 1e300, light->light.intensity, NULL,
+                          err);
+}
+
+static cf_status read_directional(const json_t *item, const json_at *at, cf_light_spec *light,
+                                  cf_error *err) {
+  static const char *const keys[] = {"type", "direction", "irradiance", NULL};
+  cf_status s;
+  light->kind = CF_LIGHT_SPEC_SINGLE;
+  light->light.kind = CF_LIGHT_DIRECTIONAL;
+  if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
+      (s = read_unit_vector(item, at, "direction", light->light.direction, err)) != CF_OK)
+    return s;
+  return json_get_numbers(item, at, "irradiance", 1, 3, 0.0, 1e300, light->light.intensity, NULL,
+                          err);
+}
+
+static cf_status read_per_image(const json_t *item, const json_at *at, cf_capture_spec *spec,
+                                cf_light_spec *light, cf_error *err) {
+  static const char *const keys[] = {"type", "directions", "intensities", NULL};
+  const char *directions, *intensities;
+  cf_status s;
+  light->kind = CF_LIGHT_SPEC_PER_IMAGE;
+  if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
+      (s = json_get_string(item, at, "directions", 1, &directions, NULL, err)) != CF_OK ||
+      (s = json_get_string(item, at, "intensities", 1, &intensities, NULL, err)) != CF_OK)
+    return s;
+  json_at d_at = json_member_at(at, "directions"), i_at = json_member_at(at, "intensities");
+  if ((s = resolve(spec->dir, directions, &d_at, &light->directions, err)) != CF_OK) return s;
+  if (strcmp(intensities, "equal") != 0)
+    return resolve(spec->dir, intensities, &i_at, &light->intensities, err);
+  /* unknown and equal (a chrome ball gives directions only): 1 each, and
+   * the capture's lights known up to one common factor */
+  if (spec->radiometry_given && !spec->radiometry_relative)
+    return json_fail(&i_at, err, CF_EPARSE,
+                     "\"equal\" intensities are known only up to a common factor: the "
+                     "capture's radiometry must be \"relative\" (or left out), not "
+                     "\"absolute\"");
+  light->intensities_equal = 1;
+  spec->radiometry_relative = 1;
+  return CF_OK;
+}
+
+static cf_status read_environment(const json_t *item, const json_at *at, cf_capture_spec *spec,
+                                  cf_light_spec *light, cf_error *err) {
+  static const char *const keys[] = {"type", "file", "rotation", "scale", "count", NULL};
+  static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const char *file;
+  long long count = 32;
+  cf_status s;
+  light->kind = CF_LIGHT_SPEC_ENVIRONMENT;
+  light->scale = 1.0;
+  memcpy(light->rotation, identity, sizeof identity);
+  if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
+      (s = json_get_string(item, at, "file", 1, &file, NULL, err)) != CF_OK ||
+      (s = json_get_numbers(item, at, "rotation", 0, 9, -1e300, 1e300, light->rotation, NULL,
+                            err)) != CF_OK ||
+      (s = json_get_number(item, at, "scale", 0, 1e-300, 1e300, &light->scale, NULL, err)) !=
+          CF_OK ||
+      (s = json_get_integer(item, at, "count", 0, 1, CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS, &count,
+                            NULL, err)) != CF_OK)
+    return s;
+  light->count = (int)count;
+  if (cf_envmap_check_rotation(light->rotation, err) != CF_OK) {
+    json_at r_at = json_member_at(at, "rotation");
+    char why[sizeof err->message];
+    snprintf(why, sizeof why, "%s", err->message);
+    return json_fail(&r_at, err, CF_EPARSE, "%s", why);
+  }
+  json_at f_at = json_member_at(at, "file");
+  return resolve(spec->dir, file, &f_at, &light->file, err);
+}
+
 static cf_status read_light(const json_t *item, const json_at *at, cf_capture_spec *spec,
                             cf_light_spec *light, cf_error *err) {
   if (!json_is_object(item))
@@ -368,97 +490,16 @@ static cf_status read_light(const json_t *item, const json_at *at, cf_capture_sp
   cf_status s = json_get_choice(item, at, "type", 1, kinds, &kind, NULL, err);
   if (s != CF_OK) return s;
   switch (kind) {
-    case 0: { /* flash */
-      static const char *const keys[] = {"type", "offset", "offset_m", "intensity", NULL};
-      int has_offset = 0, has_metres = 0;
-      light->kind = CF_LIGHT_SPEC_SINGLE;
-      light->light.kind = CF_LIGHT_FLASH;
-      if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
-          (s = json_get_numbers(item, at, "offset", 0, 3, -1e300, 1e300, light->light.position,
-                                &has_offset, err)) != CF_OK ||
-          (s = json_get_numbers(item, at, "offset_m", 0, 3, -1e300, 1e300, light->light.position,
-                                &has_metres, err)) != CF_OK ||
-          (s = json_get_numbers(item, at, "intensity", 1, 3, 0.0, 1e300, light->light.intensity,
-                                NULL, err)) != CF_OK)
-        return s;
-      if (has_offset == has_metres)
-        return json_fail(at, err, CF_EPARSE, "give exactly one of 'offset' and 'offset_m'");
-      if (has_metres && !isfinite(spec->sphere_radius_m))
-        return json_fail(at, err, CF_EPARSE, "'offset_m' needs scale.sphere_radius_m");
-      light->offset_in_metres = has_metres;
-      return CF_OK;
-    }
-    case 1: { /* point */
-      static const char *const keys[] = {"type", "position", "intensity", NULL};
-      light->kind = CF_LIGHT_SPEC_SINGLE;
-      light->light.kind = CF_LIGHT_POINT;
-      if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
-          (s = json_get_numbers(item, at, "position", 1, 3, -1e300, 1e300, light->light.position,
-                                NULL, err)) != CF_OK)
-        return s;
-      return json_get_numbers(item, at, "intensity", 1, 3, 0.0, 1e300, light->light.intensity, NULL,
-                              err);
-    }
-    case 2: { /* directional */
-      static const char *const keys[] = {"type", "direction", "irradiance", NULL};
-      light->kind = CF_LIGHT_SPEC_SINGLE;
-      light->light.kind = CF_LIGHT_DIRECTIONAL;
-      if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
-          (s = read_unit_vector(item, at, "direction", light->light.direction, err)) != CF_OK)
-        return s;
-      return json_get_numbers(item, at, "irradiance", 1, 3, 0.0, 1e300, light->light.intensity,
-                              NULL, err);
-    }
-    case 3: { /* directional_per_image */
-      static const char *const keys[] = {"type", "directions", "intensities", NULL};
-      const char *directions, *intensities;
-      light->kind = CF_LIGHT_SPEC_PER_IMAGE;
-      if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
-          (s = json_get_string(item, at, "directions", 1, &directions, NULL, err)) != CF_OK ||
-          (s = json_get_string(item, at, "intensities", 1, &intensities, NULL, err)) != CF_OK)
-        return s;
-      json_at d_at = json_member_at(at, "directions"), i_at = json_member_at(at, "intensities");
-      if ((s = resolve(spec->dir, directions, &d_at, &light->directions, err)) != CF_OK) return s;
-      if (strcmp(intensities, "equal") != 0)
-        return resolve(spec->dir, intensities, &i_at, &light->intensities, err);
-      /* unknown and equal (a chrome ball gives directions only): 1 each, and
-       * the capture's lights known up to one common factor */
-      if (spec->radiometry_given && !spec->radiometry_relative)
-        return json_fail(&i_at, err, CF_EPARSE,
-                         "\"equal\" intensities are known only up to a common factor: the "
-                         "capture's radiometry must be \"relative\" (or left out), not "
-                         "\"absolute\"");
-      light->intensities_equal = 1;
-      spec->radiometry_relative = 1;
-      return CF_OK;
-    }
-    default: { /* environment */
-      static const char *const keys[] = {"type", "file", "rotation", "scale", "count", NULL};
-      static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-      const char *file;
-      long long count = 32;
-      light->kind = CF_LIGHT_SPEC_ENVIRONMENT;
-      light->scale = 1.0;
-      memcpy(light->rotation, identity, sizeof identity);
-      if ((s = json_check_keys(item, at, keys, err)) != CF_OK ||
-          (s = json_get_string(item, at, "file", 1, &file, NULL, err)) != CF_OK ||
-          (s = json_get_numbers(item, at, "rotation", 0, 9, -1e300, 1e300, light->rotation, NULL,
-                                err)) != CF_OK ||
-          (s = json_get_number(item, at, "scale", 0, 1e-300, 1e300, &light->scale, NULL, err)) !=
-              CF_OK ||
-          (s = json_get_integer(item, at, "count", 0, 1, CF_CAPTURE_ENVIRONMENT_MAX_LIGHTS,
-                                &count, NULL, err)) != CF_OK)
-        return s;
-      light->count = (int)count;
-      if (cf_envmap_check_rotation(light->rotation, err) != CF_OK) {
-        json_at r_at = json_member_at(at, "rotation");
-        char why[sizeof err->message];
-        snprintf(why, sizeof why, "%s", err->message);
-        return json_fail(&r_at, err, CF_EPARSE, "%s", why);
-      }
-      json_at f_at = json_member_at(at, "file");
-      return resolve(spec->dir, file, &f_at, &light->file, err);
-    }
+    case 0:
+      return read_flash(item, at, spec, light, err);
+    case 1:
+      return read_point(item, at, light, err);
+    case 2:
+      return read_directional(item, at, light, err);
+    case 3:
+      return read_per_image(item, at, spec, light, err);
+    default:
+      return read_environment(item, at, spec, light, err);
   }
 }
 

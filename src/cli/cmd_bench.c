@@ -7,12 +7,12 @@
 #include <string.h>
 
 #include "args.h"
+#include "clayfit/lobe.h"
 #include "clayfit/model.h"
 #include "cli.h"
 #include "core/clock.h"
 #include "core/rng.h"
 #include "json_out.h"
-#include "model/tailed.h"
 
 enum { BENCH_SEED = 20261122 };
 
@@ -100,31 +100,11 @@ static timing time_mode(const bench_data *d, cf_model_id model, const double *pa
   return (timing){per_eval[passes / 2], per_eval[0], passes};
 }
 
-/* ---- the specular lobe alone, D V (src/model/tailed.h, issue 18): GGX's,
+/* ---- the specular lobe alone, D V (clayfit/lobe.h, issue 18): GGX's,
  * STD's with its exact masking, and STD's with the masking tabulated once
  * per γ; and the table's build, the cost a model's prepare adds ---- */
 
-enum { LOBE_GGX, LOBE_STD_EXACT, LOBE_STD_TABLE, LOBE_COUNT };
-static const char *const lobe_names[LOBE_COUNT] = {"GGX", "STD exact", "STD tabulated"};
-
-static double lobe_pass(const bench_data *d, int kind, const cf_std_lobe_prep *p, int grad) {
-  double sum = 0.0;
-  for (size_t i = 0; i < d->count; ++i) {
-    const cf_geometry *g = &d->geometry[i];
-    if (kind == LOBE_STD_EXACT) { /* F = 1: F0 = 1 */
-      cf_std_lobe s =
-          cf_std_lobe_eval(&p->tail, 1.0, 0.0, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad);
-      sum += s.value + 1e-30 * (s.d_a2 + s.d_gamma + s.d_ci + s.d_co + s.d_sin2);
-    } else {
-      cf_std_dv s =
-          kind == LOBE_GGX
-              ? cf_ggx_dv_eval(p->tail.a2, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad)
-              : cf_std_dv_eval(&p->tail, &p->table, g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, grad);
-      sum += s.value + 1e-30 * (s.d_a2 + s.d_gamma + s.d_ci + s.d_co + s.d_sin2);
-    }
-  }
-  return sum;
-}
+static const char *const lobe_names[CF_LOBE_KIND_COUNT] = {"GGX", "STD exact", "STD tabulated"};
 
 /* The median ns per call of `pass` over passes lasting min_time in all. */
 static double median_ns(double (*pass)(void *), void *user, double calls, double min_time) {
@@ -145,43 +125,43 @@ static double median_ns(double (*pass)(void *), void *user, double calls, double
 
 typedef struct lobe_job {
   const bench_data *d;
-  cf_std_lobe_prep prep;
-  int kind, grad, exact_build;
+  cf_lobe *lobe;
+  double gamma;
+  cf_lobe_kind kind;
+  int grad, exact_build;
 } lobe_job;
 
 static double lobe_job_pass(void *user) {
   const lobe_job *j = user;
-  return lobe_pass(j->d, j->kind, &j->prep, j->grad);
+  return cf_lobe_sum(j->lobe, j->kind, j->d->count, j->d->geometry, j->grad);
 }
 
 static double build_job_pass(void *user) { /* 100 builds of the table */
   lobe_job *j = user;
-  for (int i = 0; i < 100; ++i) {
-    double gamma = j->prep.tail.gamma + 1e-9 * i;
-    if (j->exact_build)
-      cf_std_table_build_exact(&j->prep.table, gamma);
-    else
-      cf_std_table_build(&j->prep.table, gamma);
-  }
-  return j->prep.table.step[0].c[0];
+  double entry = 0.0;
+  for (int i = 0; i < 100; ++i)
+    entry = cf_lobe_tabulate(j->lobe, j->gamma + 1e-9 * i, j->exact_build);
+  return entry;
 }
 
 static void time_lobes(const bench_data *d, double min_time) {
-  static lobe_job job; /* the table is a few kB: not on the stack */
-  job.d = d;
   double r = 0.3, gamma = 2.5;
-  cf_std_lobe_prepare(&job.prep, r * r * r * r, gamma);
+  lobe_job job = {d, cf_lobe_new(r, gamma), gamma, CF_LOBE_GGX, 0, 0};
+  if (!job.lobe) {
+    fprintf(stderr, "clayfit bench eval: out of memory\n");
+    return;
+  }
   printf(
       "\nthe specular lobe D V alone (no Fresnel), roughness %g, STD tail gamma %g, "
       "median ns per evaluation\n%-16s %14s %14s\n",
       r, gamma, "lobe", "value", "value+grad");
-  for (int kind = 0; kind < LOBE_COUNT; ++kind) {
+  for (int kind = 0; kind < CF_LOBE_KIND_COUNT; ++kind) {
     double ns[2];
     for (int grad = 0; grad < 2; ++grad) {
-      job.kind = kind, job.grad = grad;
+      job.kind = (cf_lobe_kind)kind, job.grad = grad;
       /* the exact masking is 20-40x slower: a fraction of the time suffices */
       ns[grad] = median_ns(lobe_job_pass, &job, (double)d->count,
-                           kind == LOBE_STD_EXACT ? 0.2 * min_time : min_time);
+                           kind == CF_LOBE_STD_EXACT ? 0.2 * min_time : min_time);
     }
     printf("%-16s %14.1f %14.1f\n", lobe_names[kind], ns[0], ns[1]);
   }
@@ -195,6 +175,7 @@ static void time_lobes(const bench_data *d, double min_time) {
       "masking)\n",
       us[0], us[1]);
   fflush(stdout);
+  cf_lobe_free(job.lobe);
 }
 
 static void bench_usage(FILE *out) {

@@ -1,7 +1,9 @@
 /* clayfit export: the formats and the dispatch (clayfit/export.h). */
+#include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
+#include "clayfit/shader.h"
 #include "export_internal.h"
 
 static const char *const format_names[CF_EXPORT_FORMAT_COUNT] = {
@@ -23,14 +25,30 @@ cf_status cf_export_format_find(const char *name, cf_export_format *format, cf_e
                       name);
 }
 
+/* Where a format's notes of values outside the target's range go. */
+typedef struct export_warning_sink {
+  cf_export_warnings *warnings;
+  const char *format_name;
+} export_warning_sink;
+
+/* A range note as a warning: "gltf: ...". */
+static void export_warning(void *user, const char *text) {
+  export_warning_sink *sink = user;
+  cf_export_warnings *w = sink->warnings;
+  if (w->count >= CF_EXPORT_MAX_WARNINGS) return;
+  snprintf(w->text[w->count], sizeof w->text[0], "%s: %s", sink->format_name, text);
+  ++w->count;
+}
+
 cf_status cf_export_write(const cf_fit_file *fit, const char *fit_path, cf_export_format format,
                           const char *path, cf_export_warnings *warnings, cf_error *err) {
   if (warnings) warnings->count = 0;
   cf_status s = cf_params_check(fit->result.model, fit->result.params, err);
   if (s != CF_OK) return s;
-  export_notes notes = {0};
-  notes.warnings = warnings;
-  notes.format_name = cf_export_format_name(format);
+  export_warning_sink sink = {warnings, cf_export_format_name(format)};
+  preset_notes notes = {0};
+  notes.range = warnings ? export_warning : NULL;
+  notes.range_user = &sink;
   switch (format) {
     case CF_EXPORT_JSON:
       return export_json(fit, fit_path, path, &notes, err);
@@ -44,10 +62,10 @@ cf_status cf_export_write(const cf_fit_file *fit, const char *fit_path, cf_expor
       return export_blender(fit, fit_path, path, &notes, err);
     case CF_EXPORT_MITSUBA:
       return export_mitsuba(fit, fit_path, path, &notes, err);
-    case CF_EXPORT_GLSL:
-      return export_glsl(fit, fit_path, path, &notes, err);
+    case CF_EXPORT_GLSL: /* the shaders write no value a target cannot take */
+      return cf_shader_write(fit, fit_path, CF_SHADER_GLSL, path, err);
     case CF_EXPORT_UNITY:
-      return export_unity(fit, fit_path, path, &notes, err);
+      return cf_shader_write(fit, fit_path, CF_SHADER_UNITY, path, err);
     case CF_EXPORT_FORMAT_COUNT:
       break;
   }

@@ -19,7 +19,6 @@
 #include <string.h>
 
 #include "export_internal.h"
-#include "model/terms.h"
 
 typedef struct blender_input {
   const char *name;
@@ -43,13 +42,13 @@ static void set4(blender_inputs *b, const char *name, const double *x) {
 }
 
 /* Every model: the base colour and the diffuse roughness. */
-static void diffuse_inputs(const export_material *m, export_notes *n, blender_inputs *b) {
+static void diffuse_inputs(const export_material *m, preset_notes *n, blender_inputs *b) {
   double sigma = export_sigma_fujii(m->sigma);
   set4(b, "Base Color", m->albedo);
   set1(b, "Metallic", 0.0);
   b->in[b->count++] = (blender_input){"Diffuse Roughness", 1, {sigma, 0, 0, 0}, 1};
   if (m->model != CF_MODEL_LAMBERT)
-    export_note(n, EXPORT_APPROX,
+    preset_note(n, PRESET_APPROX,
                 "Diffuse Roughness = B/A = %.6g (sigma %.6g rad): Blender 4.3+ uses the "
                 "energy-preserving Oren-Nayar (as OpenPBR) whose roughness is Fujii's sigma_F "
                 "in f ~ 1 + sigma_F s/t; B/A keeps clayfit's ratio of the angular to the "
@@ -59,19 +58,19 @@ static void diffuse_inputs(const export_material *m, export_notes *n, blender_in
 }
 
 /* M0 and M1: no specular lobe. */
-static void no_specular_inputs(const export_material *m, export_notes *n, blender_inputs *b) {
+static void no_specular_inputs(const export_material *m, preset_notes *n, blender_inputs *b) {
   set1(b, "Roughness", 0.5);
   set1(b, "IOR", 1.5);
   set1(b, "Specular IOR Level", 0.0);
   set1(b, "Coat Weight", 0.0);
-  export_note(n, EXPORT_EXACT,
+  preset_note(n, PRESET_EXACT,
               "no specular lobe in %s: Specular IOR Level 0 (F0 times 0: Cycles then skips "
               "the specular component)",
               m->info->code);
 }
 
 /* M4: the film as the coat, the clay's interface as the base lobe. */
-static void clay_inputs(const export_material *m, export_notes *n, blender_inputs *b) {
+static void clay_inputs(const export_material *m, preset_notes *n, blender_inputs *b) {
   double tint[3] = {m->transmittance[0], m->transmittance[1], m->transmittance[2]};
   set1(b, "Roughness", m->base_roughness);
   set1(b, "IOR", m->base_ior_rel);
@@ -80,28 +79,28 @@ static void clay_inputs(const export_material *m, export_notes *n, blender_input
   set1(b, "Coat Roughness", m->film_roughness);
   set1(b, "Coat IOR", m->film_ior);
   set4(b, "Coat Tint", tint);
-  export_note(n, EXPORT_EXACT, "film_roughness %.6g -> Coat Roughness (GGX, alpha = r^2)",
+  preset_note(n, PRESET_EXACT, "film_roughness %.6g -> Coat Roughness (GGX, alpha = r^2)",
               m->film_roughness);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "film_f0 %.6g -> Coat IOR %.6g (Cycles: the exact dielectric Fresnel); Coat Tint "
               "exp(-2 tau), applied by Cycles once along the refracted view ray as "
               "tint^(1/cos): the round trip at normal incidence",
               m->film_f0, m->film_ior);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "base lobe: Roughness = base_roughness %.6g, IOR = the relative IOR %.6g "
               "(Cycles uses IOR as it is under the coat, so the lobe's F0 is base_f0 %.6g); "
               "not at the refracted directions",
               m->base_roughness, m->base_ior_rel, m->base_f0);
-  export_note(n, EXPORT_DROPPED, "the recycling factor K");
+  preset_note(n, PRESET_DROPPED, "the recycling factor K");
 }
 
 /* M2 and M3: the dielectric lobe, and M3's clear coat. */
-static void specular_inputs(const export_material *m, export_notes *n, blender_inputs *b) {
+static void specular_inputs(const export_material *m, preset_notes *n, blender_inputs *b) {
   set1(b, "Roughness", m->roughness);
   set1(b, "IOR", m->ior);
   set1(b, "Specular IOR Level", 0.5);
-  export_note(n, EXPORT_EXACT, "roughness %.6g -> Roughness (GGX, alpha = r^2)", m->roughness);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_EXACT, "roughness %.6g -> Roughness (GGX, alpha = r^2)", m->roughness);
+  preset_note(n, PRESET_APPROX,
               "f0 %.6g -> IOR %.6g: Cycles' generalised Schlick Fresnel and its albedo-scaled "
               "layering of the diffuse (not (1 - F(c_i))(1 - F(c_o)))",
               m->f0, m->ior);
@@ -113,7 +112,7 @@ static void specular_inputs(const export_material *m, export_notes *n, blender_i
   set1(b, "Coat Weight", weight);
   set1(b, "Coat Roughness", r);
   set1(b, "Coat IOR", 1.5);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "Burley's clear coat (GTR1 width a = %.6g) -> Coat Weight = 0.25 coat_weight "
               "= %.6g, Coat IOR 1.5 (F0 0.04), Coat Roughness = sqrt(a) = %.6g: GGX "
               "without GTR1's tail, darkening the base",
@@ -174,9 +173,9 @@ static void v1_common(const double colour[3], double roughness, blender_inputs *
   set1(b, "Roughness", roughness);
 }
 
-static void v1_diffuse_note(export_notes *n, const export_material *m, const double colour[3],
+static void v1_diffuse_note(preset_notes *n, const export_material *m, const double colour[3],
                             double roughness, double loss, const char *what) {
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "Base Color %.6g, %.6g, %.6g: the colour of Cycles' Burley diffuse (Roughness "
               "%.6g) closest to the model's diffuse (%s) by least squares over the sphere "
               "metric of docs/presets.md; what Burley's cannot follow: %.1f %% RMS of the "
@@ -187,7 +186,7 @@ static void v1_diffuse_note(export_notes *n, const export_material *m, const dou
 
 /* M0 and M1: Specular 0 is no lobe (F0 0: IOR 1, F = 0); the Roughness only
  * shapes Burley's diffuse, so it is fitted too. */
-static cf_status v1_no_specular(const cf_fit_file *fit, const export_material *m, export_notes *n,
+static cf_status v1_no_specular(const cf_fit_file *fit, const export_material *m, preset_notes *n,
                                 blender_inputs *b, cf_error *err) {
   double colour[3], r, loss;
   cf_status s = v1_diffuse_fit(fit, -1.0, colour, &r, &loss, err);
@@ -195,7 +194,7 @@ static cf_status v1_no_specular(const cf_fit_file *fit, const export_material *m
   v1_common(colour, r, b);
   set1(b, "Specular", 0.0);
   set1(b, "Clearcoat", 0.0);
-  export_note(n, EXPORT_EXACT, "Specular 0: no specular lobe in %s", m->info->code);
+  preset_note(n, PRESET_EXACT, "Specular 0: no specular lobe in %s", m->info->code);
   v1_diffuse_note(n, m, colour, r, loss,
                   m->model == CF_MODEL_LAMBERT ? "Lambert" : "Oren-Nayar, with its sigma");
   return CF_OK;
@@ -203,7 +202,7 @@ static cf_status v1_no_specular(const cf_fit_file *fit, const export_material *m
 
 /* M2, M3 (and M2T as its GGX): the lobe exactly (GGX, exact Fresnel); the
  * diffuse with the lobe's Roughness. */
-static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, export_notes *n,
+static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, preset_notes *n,
                              blender_inputs *b, cf_error *err) {
   double colour[3], r, loss;
   cf_status s = v1_diffuse_fit(fit, m->roughness, colour, &r, &loss, err);
@@ -211,7 +210,7 @@ static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, e
   v1_common(colour, m->roughness, b);
   set1(b, "Specular", m->f0 / 0.08);
   set1(b, "IOR", m->ior);
-  export_note(n, EXPORT_EXACT,
+  preset_note(n, PRESET_EXACT,
               "f0 %.6g -> Specular = f0 / 0.08 = %.6g (Cycles: the exact dielectric Fresnel of "
               "IOR %.6g, as the model's); roughness %.6g -> Roughness (GGX, alpha = r^2; "
               "distribution GGX, not MULTI_GGX)",
@@ -220,7 +219,7 @@ static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, e
                   "Oren-Nayar through the interface, (1 - F(c_i))(1 - F(c_o)) ON: Principled v1 "
                   "adds its diffuse to the lobe");
   if (m->f0 > 0.08)
-    export_note(n, EXPORT_APPROX,
+    preset_note(n, PRESET_APPROX,
                 "Specular %.6g is above the slider's 1 (F0 0.08): Blender takes it from Python",
                 m->f0 / 0.08);
   if (m->model != CF_MODEL_CLEARCOAT) {
@@ -229,7 +228,7 @@ static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, e
   }
   set1(b, "Clearcoat", m->coat_weight);
   set1(b, "Clearcoat Roughness", sqrt(m->gtr1_a));
-  export_note(n, EXPORT_EXACT,
+  preset_note(n, PRESET_EXACT,
               "Burley's clear coat -> Clearcoat = coat_weight %.6g, Clearcoat Roughness = "
               "sqrt(a) = %.6g (Cycles: GTR1 of width roughness^2, separable Smith with alpha "
               "0.25, weight 0.25: Burley's lobe; its F is the exact Fresnel of IOR 1.5 where "
@@ -241,7 +240,7 @@ static cf_status v1_specular(const cf_fit_file *fit, const export_material *m, e
 /* M4 (and M4T as its GGX): the film's lobe as the specular lobe (GGX and
  * exact Fresnel, as the model's top); everything under the film as the
  * diffuse colour; the base's lobe, seen through the film, as the clear coat. */
-static cf_status v1_clay(const cf_fit_file *fit, const export_material *m, export_notes *n,
+static cf_status v1_clay(const cf_fit_file *fit, const export_material *m, preset_notes *n,
                          blender_inputs *b, cf_error *err) {
   double colour[3], r, loss, eta1 = m->film_ior;
   cf_status s = v1_diffuse_fit(fit, m->film_roughness, colour, &r, &loss, err);
@@ -256,14 +255,14 @@ static cf_status v1_clay(const cf_fit_file *fit, const export_material *m, expor
   double coat = fmin(1.0, m->base_f0 * t1 * t1 * tmean / (eta1 * eta1) / 0.01);
   set1(b, "Clearcoat", coat);
   set1(b, "Clearcoat Roughness", m->base_roughness);
-  export_note(n, EXPORT_EXACT,
+  preset_note(n, PRESET_EXACT,
               "the film's lobe -> Specular = film_f0 / 0.08 = %.6g (the exact Fresnel of IOR "
               "%.6g), Roughness = film_roughness %.6g (GGX)",
               m->film_f0 / 0.08, eta1, m->film_roughness);
   v1_diffuse_note(n, m, colour, r, loss,
                   "the base seen through the film: its transmission, absorption, 1/eta1^2 and "
                   "recycling K");
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "the base's lobe -> Clearcoat = base_f0 (1 - film_f0)^2 mean(exp(-2 tau)) / "
               "eta1^2 / 0.01 = %.6g, Clearcoat Roughness = base_roughness %.6g: GTR1, not GGX, "
               "and not refracted",
@@ -271,42 +270,42 @@ static cf_status v1_clay(const cf_fit_file *fit, const export_material *m, expor
   return CF_OK;
 }
 
-static void write_inputs(export_text *t, const char *name, const blender_inputs *b) {
-  export_printf(t, "%s = {\n", name);
+static void write_inputs(preset_text *t, const char *name, const blender_inputs *b) {
+  preset_printf(t, "%s = {\n", name);
   for (int i = 0; i < b->count; ++i) {
     const blender_input *in = &b->in[i];
     if (in->components == 4)
-      export_printf(t, "    \"%s\": (%.9g, %.9g, %.9g, 1.0),\n", in->name, in->value[0],
+      preset_printf(t, "    \"%s\": (%.9g, %.9g, %.9g, 1.0),\n", in->name, in->value[0],
                     in->value[1], in->value[2]);
     else
-      export_printf(t, "    \"%s\": %.9g,\n", in->name, in->value[0]);
+      preset_printf(t, "    \"%s\": %.9g,\n", in->name, in->value[0]);
   }
-  export_printf(t, "}\n");
+  preset_printf(t, "}\n");
 }
 
 /* The script: the header comment, both generations' inputs, the function
  * that picks one by bpy.app.version and sets it. */
-static void write_script(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                         const export_material *m, const export_notes *n, const export_notes *n1,
+static void write_script(preset_text *t, const cf_fit_file *fit, const char *fit_path,
+                         const export_material *m, const preset_notes *n, const preset_notes *n1,
                          const blender_inputs *b, const blender_inputs *b1) {
-  export_printf(t,
+  preset_printf(t,
                 "# Blender (bpy): builds the material with a Principled BSDF, v2 in Blender 4,\n"
                 "# v1 in Blender 3.x.\n");
-  export_printf(t, "# Run it in Blender's Python console or: blender --python THIS_FILE\n#\n");
-  export_provenance(t, fit, fit_path, "# ", text_escape_python_comment);
-  export_printf(t, "#\n# Blender 4 (Principled v2, INPUTS):\n");
-  export_notes_write(t, n, "# ");
-  export_printf(t, "#\n# Blender 3.x (Principled v1, INPUTS_V1):\n");
-  export_notes_write(t, n1, "# ");
-  export_printf(t, "\nimport bpy\n\nNAME = \"clayfit_%s\"\n\n", m->info->name);
-  export_printf(t, "# Blender 4 Principled BSDF input -> value (linear RGB colours)\n");
+  preset_printf(t, "# Run it in Blender's Python console or: blender --python THIS_FILE\n#\n");
+  preset_provenance(t, fit, fit_path, "# ", text_escape_python_comment);
+  preset_printf(t, "#\n# Blender 4 (Principled v2, INPUTS):\n");
+  preset_notes_write(t, n, "# ");
+  preset_printf(t, "#\n# Blender 3.x (Principled v1, INPUTS_V1):\n");
+  preset_notes_write(t, n1, "# ");
+  preset_printf(t, "\nimport bpy\n\nNAME = \"clayfit_%s\"\n\n", m->info->name);
+  preset_printf(t, "# Blender 4 Principled BSDF input -> value (linear RGB colours)\n");
   write_inputs(t, "INPUTS", b);
-  export_printf(t, "# inputs an older Blender 4 may lack\nOPTIONAL = {");
+  preset_printf(t, "# inputs an older Blender 4 may lack\nOPTIONAL = {");
   for (int i = 0; i < b->count; ++i)
-    if (b->in[i].optional) export_printf(t, "\"%s\"", b->in[i].name);
-  export_printf(t, "}\n# Blender 3.x Principled BSDF (v1) input -> value\n");
+    if (b->in[i].optional) preset_printf(t, "\"%s\"", b->in[i].name);
+  preset_printf(t, "}\n# Blender 3.x Principled BSDF (v1) input -> value\n");
   write_inputs(t, "INPUTS_V1", b1);
-  export_printf(
+  preset_printf(
       t,
       "\n\n"
       "def build(name=NAME):\n"
@@ -337,7 +336,7 @@ static void write_script(export_text *t, const cf_fit_file *fit, const char *fit
 }
 
 cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const char *path,
-                         export_notes *n, cf_error *err) {
+                         preset_notes *n, cf_error *err) {
   export_material m;
   cf_status s_map = export_material_from_fit(fit, &m, err);
   if (s_map != CF_OK) return s_map;
@@ -351,18 +350,18 @@ cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const cha
   else
     specular_inputs(&m, n, &b);
   /* Blender 3.x: the same material in Principled v1, with its own notes */
-  export_notes n1 = {0};
-  n1.warnings = n->warnings;
-  n1.format_name = n->format_name;
+  preset_notes n1 = {0};
+  n1.range = n->range;
+  n1.range_user = n->range_user;
   if (m.lobe_count > 0)
-    export_note(&n1, EXPORT_APPROX, "each tailed lobe as its GGX, as for Blender 4 above");
+    preset_note(&n1, PRESET_APPROX, "each tailed lobe as its GGX, as for Blender 4 above");
   blender_inputs b1 = {0};
   cf_status s1 = m.model == CF_MODEL_LAMBERT || m.model == CF_MODEL_OREN_NAYAR
                      ? v1_no_specular(fit, &m, &n1, &b1, err)
                  : m.model == CF_MODEL_CLAY ? v1_clay(fit, &m, &n1, &b1, err)
                                             : v1_specular(fit, &m, &n1, &b1, err);
   if (s1 != CF_OK) return s1;
-  export_text t = {0};
+  preset_text t = {0};
   write_script(&t, fit, fit_path, &m, n, &n1, &b, &b1);
-  return export_text_write(&t, path, err);
+  return preset_text_write(&t, path, err);
 }

@@ -94,10 +94,10 @@ static json_t *rgb(const double *x, int alpha) {
 
 /* A [0, 1] factor: outside, the nearest end is written (glTF's schema
  * allows nothing else) and the change reported. */
-static double factor(export_notes *n, const char *name, double x) {
+static double factor(preset_notes *n, const char *name, double x) {
   if (x >= 0.0 && x <= 1.0) return x;
   double y = x < 0.0 ? 0.0 : 1.0;
-  export_note(n, EXPORT_RANGE, "%s = %.6g is outside glTF's range [0, 1]: written as %g", name, x,
+  preset_note(n, PRESET_RANGE, "%s = %.6g is outside glTF's range [0, 1]: written as %g", name, x,
               y);
   return y;
 }
@@ -129,12 +129,12 @@ static double gltf_basis(const void *ctx, int variant, const double l[3], const 
  * takes M2 from 13.1 % (albedo) to 6.4 %, M4 (the film as the lobe) from
  * 20.3 % (albedo exp(-2 tau)) to 4.6 %. */
 static cf_status gltf_colour(const cf_fit_file *fit, const export_material *m, gltf_diffuse g,
-                             export_notes *n, double base[3], cf_error *err) {
+                             preset_notes *n, double base[3], cf_error *err) {
   export_diffuse_colour d;
   cf_status s = export_fit_diffuse_colour(fit, gltf_basis, &g, 1, "glTF diffuse colour", &d, err);
   if (s != CF_OK) return s;
   memcpy(base, d.colour, sizeof d.colour);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "baseColorFactor %.6g, %.6g, %.6g: the colour of glTF's Lambertian diffuse (times "
               "1 - F(v.h) and the coat's 1 - F(n.v)) closest to the model's diffuse by least "
               "squares over the sphere metric of docs/presets.md; what it cannot follow: %.1f %% "
@@ -149,7 +149,7 @@ static cf_status gltf_colour(const cf_fit_file *fit, const export_material *m, g
  * as the diffuse colour; the base's lobe, seen through the film, as the
  * clear coat. The film as the clear coat (F0 fixed at 0.04) was 39.9 % off
  * in three.js, this is 4.6 % (docs/fidelity.md). */
-static void clay_lobes(const export_material *m, export_notes *n, json_t *ext, double *roughness,
+static void clay_lobes(const export_material *m, preset_notes *n, json_t *ext, double *roughness,
                        gltf_diffuse *g) {
   double eta1 = m->film_ior, t1 = 1.0 - m->film_f0;
   double tmean = (m->transmittance[0] + m->transmittance[1] + m->transmittance[2]) / 3.0;
@@ -161,30 +161,30 @@ static void clay_lobes(const export_material *m, export_notes *n, json_t *ext, d
   json_object_set_new(ext, "KHR_materials_clearcoat",
                       json_pack("{s:f, s:f}", "clearcoatFactor", coat, "clearcoatRoughnessFactor",
                                 m->base_roughness));
-  export_note(n, EXPORT_EXACT,
+  preset_note(n, PRESET_EXACT,
               "the film's lobe -> roughnessFactor = film_roughness %.6g (GGX, alpha = r^2), "
               "KHR_materials_ior ior = the film's IOR %.6g (F0 = film_f0 %.6g)",
               m->film_roughness, eta1, m->film_f0);
-  export_note(n, EXPORT_APPROX,
+  preset_note(n, PRESET_APPROX,
               "the base's lobe -> clearcoatFactor = base_f0 (1 - film_f0)^2 mean(exp(-2 tau)) / "
               "eta1^2 / 0.04 = %.6g (its reflectance at normal incidence through the film), "
               "clearcoatRoughnessFactor = base_roughness %.6g: not refracted, no tint",
               coat, m->base_roughness);
 }
 
-static cf_status material_json(const cf_fit_file *fit, const export_material *m, export_notes *n,
+static cf_status material_json(const cf_fit_file *fit, const export_material *m, preset_notes *n,
                                json_t *used, json_t **material, cf_error *err) {
   json_t *ext = json_object();
   double base[3], roughness = 1.0;
   gltf_diffuse g = {0.0, 0.0, 0.0};
   if (m->model != CF_MODEL_LAMBERT)
-    export_note(n, EXPORT_DROPPED,
+    preset_note(n, PRESET_DROPPED,
                 "diffuse_roughness sigma %.6g rad: glTF's diffuse is Lambertian (no ratified "
                 "extension has diffuse roughness); the colour below absorbs what it can",
                 m->sigma);
   if (m->model == CF_MODEL_LAMBERT || m->model == CF_MODEL_OREN_NAYAR) {
     json_object_set_new(ext, "KHR_materials_specular", json_pack("{s:f}", "specularFactor", 0.0));
-    export_note(n, EXPORT_EXACT,
+    preset_note(n, PRESET_EXACT,
                 "no specular lobe in %s: KHR_materials_specular specularFactor 0 (scales the "
                 "dielectric Fresnel, grazing term included, to 0: the diffuse alone remains)",
                 m->info->code);
@@ -194,7 +194,7 @@ static cf_status material_json(const cf_fit_file *fit, const export_material *m,
     roughness = m->roughness;
     g = (gltf_diffuse){m->f0, 1.0, 0.0};
     json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", m->ior));
-    export_note(n, EXPORT_EXACT,
+    preset_note(n, PRESET_EXACT,
                 "roughness %.6g -> roughnessFactor, f0 %.6g -> KHR_materials_ior ior %.6g: glTF's "
                 "specular lobe is clayfit's (GGX, height-correlated Smith, Schlick on v.h)",
                 m->roughness, m->f0, m->ior);
@@ -209,7 +209,7 @@ static cf_status material_json(const cf_fit_file *fit, const export_material *m,
       json_object_set_new(
           ext, "KHR_materials_clearcoat",
           json_pack("{s:f, s:f}", "clearcoatFactor", weight, "clearcoatRoughnessFactor", r));
-      export_note(n, EXPORT_APPROX,
+      preset_note(n, PRESET_APPROX,
                   "Burley's clear coat (coat_weight %.6g, GTR1 width a = %.6g) -> the GGX coat "
                   "closest to it by least squares over the sphere metric: clearcoatFactor %.6g, "
                   "clearcoatRoughnessFactor %.6g (%.1f %% RMS of the coat left; 0.25 coat_weight "
@@ -232,7 +232,7 @@ static cf_status material_json(const cf_fit_file *fit, const export_material *m,
   return CF_OK;
 }
 
-static json_t *notes_json(const export_notes *n) {
+static json_t *notes_json(const preset_notes *n) {
   static const char *const names[] = {"exact", "approximate", "dropped", "out_of_range"};
   json_t *out = json_object();
   for (int kind = 0; kind < 4; ++kind) {
@@ -245,7 +245,7 @@ static json_t *notes_json(const export_notes *n) {
 }
 
 cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err) {
+                      preset_notes *notes, cf_error *err) {
   export_material m;
   cf_status s_map = export_material_from_fit(fit, &m, err);
   if (s_map != CF_OK) return s_map;
@@ -269,8 +269,8 @@ cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *
   char *uri = data ? malloc(uri_size) : NULL;
   if (uri) snprintf(uri, uri_size, "data:application/octet-stream;base64,%s", data);
   free(data);
-  export_text prov = {0};
-  export_provenance(&prov, fit, fit_path, "", text_escape_utf8);
+  preset_text prov = {0};
+  preset_provenance(&prov, fit, fit_path, "", text_escape_utf8);
   json_t *doc = NULL;
   if (uri && !prov.failed) {
     float nmin[3] = {-1, -1, -1}, nmax[3] = {1, 1, 1};
@@ -311,7 +311,7 @@ cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *
   json_decref(used);
   free(uri);
   free(s.bytes);
-  export_text_free(&prov);
+  preset_text_free(&prov);
   if (!doc) return cf_error_set(err, CF_ENOMEM, "%s: could not build the glTF", path);
   if (json_array_size(json_object_get(doc, "extensionsUsed")) == 0)
     json_object_del(doc, "extensionsUsed");

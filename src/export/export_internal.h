@@ -1,60 +1,17 @@
-/* What the export formats share: a growing text buffer, the notes each
- * file carries (what maps exactly, approximately, what is dropped), and
- * the physics of the mapping (export_mapping.c). Private to src/export. */
+/* What the export formats share: the physics of the mapping
+ * (export_mapping.c), and, from the layer below (src/shader/preset_text.h),
+ * the text, the notes and the provenance of every material file. Private to
+ * src/export. */
 #ifndef CLAYFIT_EXPORT_INTERNAL_H
 #define CLAYFIT_EXPORT_INTERNAL_H
 
 #include <stddef.h>
 
 #include "clayfit/export.h"
+#include "clayfit/tailed_ggx.h"
 #include "core/text_escape.h"
 #include "core/vec.h"
-
-/* ---- text ---- */
-typedef struct export_text {
-  char *data;
-  size_t size, capacity;
-  int failed; /* out of memory */
-} export_text;
-
-void export_printf(export_text *t, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-/* Untrusted text (a name, a path: from fit.json or the command line)
- * escaped for the file's syntax (core/text_escape.h). */
-void export_escaped(export_text *t, text_escape_fn escape, const char *text);
-/* Write the text to path and free it. */
-cf_status export_text_write(export_text *t, const char *path, cf_error *err);
-void export_text_free(export_text *t);
-
-/* ---- notes ---- */
-typedef enum export_note_kind {
-  EXPORT_EXACT,   /* the target computes what the model does */
-  EXPORT_APPROX,  /* the target's term differs (how, in the note) */
-  EXPORT_DROPPED, /* the target has no such term */
-  EXPORT_RANGE    /* a value outside the target's range: also a warning */
-} export_note_kind;
-
-enum { EXPORT_MAX_NOTES = 40 };
-
-typedef struct export_notes {
-  int count;
-  export_note_kind kind[EXPORT_MAX_NOTES];
-  char text[EXPORT_MAX_NOTES][512];
-  cf_export_warnings *warnings; /* may be NULL */
-  const char *format_name;
-} export_notes;
-
-void export_note(export_notes *n, export_note_kind kind, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-/* The notes as comment lines, each starting with `prefix` (and `suffix`
- * at the end of the line, for block comments that need it). */
-void export_notes_write(export_text *t, const export_notes *n, const char *prefix);
+#include "shader/preset_text.h"
 
 /* ---- the physics ---- */
 /* η = (1 + √F0)/(1 − √F0) (docs/model.md (7)) and back. */
@@ -73,65 +30,8 @@ double export_sigma_fujii(double sigma);
 double export_gtr1_width(double gloss);
 
 /* ---- a tailed lobe (STD, docs/model.md §2.8) in the GGX-only formats
- * (docs/presets.md, "Tailed lobes in GGX-only formats"): the GGX (r, F0)
- * of least squares over the hemisphere, weighted as a renderer sees it. */
-
-/* The Fresnel of both lobes: Schlick's (docs/model.md (8) of model
- * version 1) or the exact dielectric one from η = (1 + √F0)/(1 − √F0)
- * (terms.h, model version 2). EXPORT_FRESNEL_MODELS is the models' own. */
-typedef enum export_fresnel { EXPORT_FRESNEL_SCHLICK, EXPORT_FRESNEL_DIELECTRIC } export_fresnel;
-#if defined(CF_MODEL_VERSION) && CF_MODEL_VERSION >= 2
-#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_DIELECTRIC
-#else
-#define EXPORT_FRESNEL_MODELS EXPORT_FRESNEL_SCHLICK
-#endif
-
-/* Gauss-Legendre nodes and weights on [0, 1], n of them (Newton on P_n from
- * the Chebyshev-like guess; Numerical Recipes' gauleg): the tailed lobe's
- * quadratures and their tests. */
-void export_gauss_legendre01(int n, double *x, double *w);
-
-/* Gauss-Legendre points: views (their elevation), θ_h, φ_h. The default
- * agrees with 128 × 192 × 64 points to 1.4e-4 relative in the loss and
- * 3.5e-5 in (r, F0), over r in [0.03, 1] and γ in [1.55, 1e6]
- * (docs/presets.md; tests/export/test_tailed_ggx.c doubles it). */
-typedef struct export_tail_quadrature {
-  int views, thetas, phis;
-} export_tail_quadrature;
-#define EXPORT_TAIL_QUADRATURE \
-  { 32, 32, 12 }
-
-typedef struct export_tail_fit {
-  double r, f0;      /* the GGX fitted */
-  double rms_loss;   /* relative RMS of the fitted GGX over the lobe */
-  double naive_loss; /* the same for GGX with the tailed lobe's own (r, F0) */
-  int iterations;    /* Levenberg-Marquardt's */
-  size_t nodes;      /* quadrature points where c_i > 0 */
-} export_tail_fit;
-
-/* The fit with a chosen Fresnel, quadrature and start (NULL: the tailed
- * lobe's (r, F0)). r and F0 in the parameter table's ranges, γ > 1.5 and
- * finite; else CF_ERANGE with the reason. */
-cf_status export_tail_fit_ggx(double r, double gamma, double f0, export_fresnel fresnel,
-                              const export_tail_quadrature *q, const double start[2],
-                              export_tail_fit *out, cf_error *err);
-
-/* What the exporters call: the models' Fresnel, the default quadrature; in
- * air (M2T's lobe, M4T's film). */
-cf_status export_ggx_from_tailed(double r, double gamma, double f0, double *r_ggx, double *f0_ggx,
-                                 double *rms_loss, cf_error *err);
-
-/* M4's base lobe, seen from outside through the film (F0 film_f0, optical
- * depth tau: M4's mean over the channels) at the refracted directions: the
- * same least squares with the lobe's directions inside the film's critical
- * cone, weighted as an outside pixel sees them (export_mapping.c, tail_film).
- * film_f0 and tau in the parameter table's ranges, else CF_ERANGE. */
-cf_status export_tail_fit_ggx_film(double r, double gamma, double f0, double film_f0, double tau,
-                                   export_fresnel fresnel, const export_tail_quadrature *q,
-                                   const double start[2], export_tail_fit *out, cf_error *err);
-cf_status export_ggx_from_tailed_film(double r, double gamma, double f0, double film_f0, double tau,
-                                      double *r_ggx, double *f0_ggx, double *rms_loss,
-                                      cf_error *err);
+ * (docs/presets.md, "Tailed lobes in GGX-only formats"): the GGX of least
+ * squares (clayfit/tailed_ggx.h, clayfit_model_fit) and its note. */
 
 /* "GGX approximation: 6.1 % RMS over the lobe" (below 0.05 %: "< 0.1 %"),
  * the one wording of every preset. */
@@ -139,7 +39,7 @@ void export_ggx_loss_text(double rms_loss, char *text, size_t size);
 /* The note of a tailed lobe (`lobe` names it: "the specular lobe"): its
  * (r, γ, F0), the GGX written and the loss. At γ = 2 (GGX itself, the
  * mapping the identity) an exact note with a loss of 0. */
-void export_note_tailed(export_notes *n, const char *lobe, double r, double gamma, double f0,
+void export_note_tailed(preset_notes *n, const char *lobe, double r, double gamma, double f0,
                         double r_ggx, double f0_ggx, double rms_loss);
 
 /* ---- the diffuse colour a target's diffuse needs (docs/presets.md) ----
@@ -167,7 +67,7 @@ cf_status export_fit_diffuse_colour(const cf_fit_file *fit, export_diffuse_basis
  * left. */
 cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *roughness,
                               double *loss, cf_error *err);
-/* A tailed lobe of the fit and the GGX written for it (export_ggx_from_tailed). */
+/* A tailed lobe of the fit and the GGX written for it (cf_tailed_ggx_default). */
 typedef struct export_tailed_lobe {
   char name[192]; /* for the note: "the specular lobe" */
   double r, f0;   /* the fit's */
@@ -176,8 +76,8 @@ typedef struct export_tailed_lobe {
 
 /* The fitted material, read off a fit by model. A tailed model (M2T, M4T)
  * is read as its GGX twin: `model` is the twin, every roughness and F0
- * below the GGX of its lobe (export_ggx_from_tailed; M4T's base under the
- * film, export_ggx_from_tailed_film); `info` stays the fitted model's,
+ * below the GGX of its lobe (cf_tailed_ggx_default; M4T's base under the
+ * film); `info` stays the fitted model's,
  * `lobes` the tailed lobes with their losses (export_common_notes notes
  * each). */
 typedef struct export_material {
@@ -202,32 +102,19 @@ typedef struct export_material {
 /* CF_ENOMEM / CF_ENUMERIC from the GGX fit of a tailed lobe. */
 cf_status export_material_from_fit(const cf_fit_file *fit, export_material *m, cf_error *err);
 
-/* Three lines of provenance: clayfit version, fit file, model, capture;
- * every line starts with `prefix`, and the text from fit.json and the fit
- * file's path are escaped with `escape` (the syntax of a comment, or
- * text_escape_utf8 for a JSON string). */
-void export_provenance(export_text *t, const cf_fit_file *fit, const char *fit_path,
-                       const char *prefix, text_escape_fn escape);
-
 /* The common notes: roughness convention, σ and the film's colour. */
-void export_common_notes(export_notes *n, const export_material *m);
+void export_common_notes(preset_notes *n, const export_material *m);
 
 /* The writers, one file each. */
 cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_mtlx(const cf_fit_file *fit, const char *fit_path, const char *path, int openpbr,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_gltf(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
+                      preset_notes *notes, cf_error *err);
 cf_status export_blender(const cf_fit_file *fit, const char *fit_path, const char *path,
-                         export_notes *notes, cf_error *err);
+                         preset_notes *notes, cf_error *err);
 cf_status export_mitsuba(const cf_fit_file *fit, const char *fit_path, const char *path,
-                         export_notes *notes, cf_error *err);
-/* The exact model as shaders (export_shader*.c, docs/shaders.md): a three.js
- * ES module; a Unity folder (path: the folder, created). */
-cf_status export_glsl(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err);
-cf_status export_unity(const cf_fit_file *fit, const char *fit_path, const char *path,
-                       export_notes *notes, cf_error *err);
+                         preset_notes *notes, cf_error *err);
 
 #endif /* CLAYFIT_EXPORT_INTERNAL_H */

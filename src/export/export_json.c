@@ -53,7 +53,7 @@ static json_t *response_json(const cf_fit_result *r) {
 }
 
 cf_status export_json(const cf_fit_file *fit, const char *fit_path, const char *path,
-                      export_notes *notes, cf_error *err) {
+                      preset_notes *notes, cf_error *err) {
   (void)notes; /* lossless: nothing to note */
   const cf_fit_result *r = &fit->result;
   const cf_model_info *m = cf_model_info_get(r->model);

@@ -9,32 +9,29 @@
  *      fit_response_starts.c), then on every observation, with the
  *      robust loss and, for a noise model, weights from the prediction to
  *      their fixed point;
- *   4. the covariance (ceres::Covariance); parameters the capture does not
- *      constrain are held at their defaults, named, and the fit repeated
- *      (fit_uncertainty.c);
- *   5. residual statistics (fit_residuals.c). */
+ *   4. the covariance; parameters the capture does not constrain are held
+ *      at their defaults, named, and the fit repeated (fit_uncertainty.c);
+ *   5. the result (fit_outcome.c) and residual statistics
+ *      (fit_residuals.c). */
 #include "clayfit/fit.h"
 
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/clock.h"
-#include "fit_budget.h"
-#include "fit_footprint.h"
 #include "fit_gains.h"
 #include "fit_hidden_base.h"
 #include "fit_jpeg.h"
 #include "fit_multistart.h"
+#include "fit_outcome.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
 #include "fit_response_starts.h"
 #include "fit_run.h"
+#include "fit_sample.h"
 #include "fit_uncertainty.h"
-#include "lsq/lsq.h"
 
 /* The best start refines on about REFINE_TARGET observations before all of
  * them (each stage starts closer, where iterations cost more). */
@@ -69,13 +66,17 @@ void cf_fit_default_options(cf_fit_options *o, cf_model_id model) {
  * fitted. Returns 1 when it switched (with a warning). */
 static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *plan,
                              cf_fit_result *r) {
-  int sk = fit_scale_slot(p->model);
+  cf_model_id model = fit_problem_model(p);
+  int sk = fit_scale_slot(model);
   if (!plan->scale || sk < 0 || plan->status[sk] != CF_PARAM_HELD_FOR_SCALE || o->hold[sk])
     return 0;
+  const int *at_bound = fit_problem_read_at_bound(p);
   int albedo = -1;
-  for (int u = 0; u < p->num_unknowns; ++u) {
-    const fit_unknown *unk = &p->unknowns[u];
-    if (unk->kind == FIT_LOG_SLOT && p->at_bound[u] > 0) albedo = unk->slot;
+  for (int u = 0; u < fit_problem_unknown_count(p); ++u) {
+    fit_unknown unk = fit_problem_unknown(p, u);
+    if (unk.kind == &fit_kind_material && fit_slot_form_of(model, unk.slot) == FIT_SLOT_LOG &&
+        at_bound[u] > 0)
+      albedo = unk.slot;
   }
   if (albedo < 0) return 0;
   char name[48];
@@ -85,7 +86,8 @@ static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *
                   "relative radiometry: with the interface F0 held at %g the albedo would exceed "
                   "1, so the scale comes from the albedo instead (%s held at 1, F0 fitted); "
                   "hold F0 (--hold) to choose another assumption",
-                  p->params[sk], cf_model_slot_name(p->model, albedo, name, sizeof name));
+                  fit_problem_read_values(p)->params[sk],
+                  cf_model_slot_name(model, albedo, name, sizeof name));
   return 1;
 }
 
@@ -99,13 +101,27 @@ static int scale_from_albedo(fit_problem *p, const cf_fit_options *o, fit_plan *
 static cf_status settled_at_minimum(fit_problem *p, const cf_fit_options *o, double *jtj,
                                     cf_lsq_summary *summary, int *settled, cf_error *err) {
   *settled = 0;
-  if (p->solves == 0 || p->num_unknowns > FIT_DECREMENT_MOST) return CF_OK;
+  if (fit_problem_tally(p)->solves == 0 || fit_problem_unknown_count(p) > FIT_DECREMENT_MOST)
+    return CF_OK;
   double g[FIT_DECREMENT_MOST], cost;
   cf_status s = fit_normal_equations(p, fit_threads(o), jtj, g, &cost, err);
   if (s != CF_OK) return s;
   *settled = fit_newton_decrement_from(p, jtj, g) < FIT_RESOLVE_DECREMENT && fit_pins_hold(p, g);
   if (*settled) summary->final_cost = cost;
   return CF_OK;
+}
+
+/* Solve the plan's unknowns with reweighting and, once, switch the
+ * scale's assumption if the albedo says so (*switched) and solve again. */
+static cf_status solve_switching(fit_problem *p, const cf_fit_options *o, fit_plan *plan,
+                                 cf_fit_result *r, int *switched, cf_error *err) {
+  cf_lsq_summary summary;
+  cf_status s = fit_solve_reweighted(p, o, REWEIGHT_ROUNDS, &summary, NULL, err);
+  if (s != CF_OK || *switched || !scale_from_albedo(p, o, plan, r)) return s;
+  *switched = 1;
+  s = fit_declare(p, plan, err);
+  if (s == CF_OK) s = fit_solve_reweighted(p, o, REWEIGHT_ROUNDS, &summary, NULL, err);
+  return s;
 }
 
 /* Refine (params, log_scale) on a subsample of about `target` observations
@@ -117,31 +133,22 @@ static cf_status refine_on_subsample(const cf_capture *capture, const fit_popula
                                      cf_fit_result *r, int *switched, cf_error *err) {
   if (population->count < 2 * target) return CF_OK;
   fit_sample sample;
-  fit_problem sub;
-  cf_status s = fit_problem_init_sample(&sub, &sample, capture, o->model, population, target, err);
+  fit_problem *sub;
+  cf_status s = fit_sample_problem(&sub, &sample, capture, o->model, population, target, err);
   if (s != CF_OK) return s;
-  s = fit_declare(&sub, plan, err);
+  s = fit_declare_robust(sub, plan, o, sigma, err);
+  fit_values *v = fit_problem_values(sub);
   if (s == CF_OK) {
-    memcpy(sub.params, params, sizeof sub.params);
-    sub.log_scale = *log_scale;
-    if (!fit_capture_has_noise(capture)) fit_problem_set_sigma(&sub, capture, sigma);
-    sub.loss = o->loss;
-    sub.loss_scale = o->loss_scale;
-    sub.newton_start = 1; /* from the best start's minimum */
-    cf_lsq_summary summary;
-    s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, NULL, err);
-    if (s == CF_OK && !*switched && scale_from_albedo(&sub, o, plan, r)) {
-      *switched = 1;
-      s = fit_declare(&sub, plan, err);
-      if (s == CF_OK)
-        s = fit_solve_reweighted(&sub, capture, o, REWEIGHT_ROUNDS, &summary, NULL, err);
-    }
+    memcpy(v->params, params, sizeof v->params);
+    v->log_scale = *log_scale;
+    fit_problem_settings(sub)->newton_start = 1; /* from the best start's minimum */
+    s = solve_switching(sub, o, plan, r, switched, err);
   }
   if (s == CF_OK) {
-    memcpy(params, sub.params, sizeof sub.params);
-    *log_scale = sub.log_scale;
+    memcpy(params, v->params, sizeof v->params);
+    *log_scale = v->log_scale;
   }
-  fit_problem_release(&sub);
+  fit_problem_free(sub);
   fit_sample_free(&sample);
   return s;
 }
@@ -169,74 +176,6 @@ cf_status cf_fit_check_options(const cf_fit_options *o, cf_error *err) {
   return CF_OK;
 }
 
-void fit_add_warning(cf_fit_result *r, const char *format, ...) {
-  if (r->warning_count == CF_FIT_MAX_WARNINGS) return;
-  va_list args;
-  va_start(args, format);
-  vsnprintf(r->warnings[r->warning_count++], sizeof r->warnings[0], format, args);
-  va_end(args);
-}
-
-/* The response's covariance: the row of its unknown u (a slope) against
- * the other slopes'. */
-static void response_covariance(const fit_problem *p, const double *covariance, int u,
-                                cf_fit_result *r) {
-  int n = p->num_unknowns, a = p->unknowns[u].slot;
-  for (int v = 0; v < n; ++v)
-    if (p->unknowns[v].kind == FIT_RESPONSE)
-      r->response_covariance[a * CF_RESPONSE_MODEL_KNOTS + p->unknowns[v].slot] =
-          covariance[u * n + v];
-}
-
-/* The result from the solved problem and its covariance. */
-static cf_status fill_result(const fit_problem *p, const fit_plan *plan, const double *covariance,
-                             cf_fit_result *r, cf_error *err) {
-  const cf_model_info *m = cf_model_info_get(p->model);
-  memcpy(r->params, p->params, sizeof p->params);
-  for (int k = 0; k < m->dim; ++k) r->status[k] = plan->status[k];
-  int n = p->num_unknowns, map[CF_MAX_DIM];
-  r->free_count = 0;
-  r->free_unknowns = 0;
-  for (int u = 0; u < n; ++u) {
-    const fit_unknown *unk = &p->unknowns[u];
-    double var = covariance[u * n + u];
-    ++r->free_unknowns;
-    if (unk->kind == FIT_LOG_SCALE) {
-      r->scale_sd = exp(p->log_scale) * sqrt(fmax(0.0, var)); /* d s = s d log s */
-    } else if (unk->kind == FIT_RESPONSE) {
-      response_covariance(p, covariance, u, r);
-    } else if (unk->kind == FIT_LOG_EXPOSURE || unk->kind == FIT_LOG_BALANCE ||
-               unk->kind == FIT_LOG_LIGHT) {
-      continue; /* (fit_gains_sd, fit_balance_of, fit_light_gains_of) */
-    } else if (p->at_bound[u]) {
-      r->status[unk->slot] = CF_PARAM_AT_BOUND;
-      r->sd[unk->slot] = NAN;
-    } else {
-      r->sd[unk->slot] = fit_slot_sd(p, unk, var);
-      map[r->free_count] = u;
-      r->free_slots[r->free_count++] = unk->slot;
-    }
-  }
-  /* the correlation of the model's free slots */
-  for (int a = 0; a < r->free_count; ++a)
-    for (int b = 0; b < r->free_count; ++b) {
-      double va = covariance[map[a] * n + map[a]], vb = covariance[map[b] * n + map[b]];
-      r->correlation[a * r->free_count + b] =
-          va > 0.0 && vb > 0.0 ? covariance[map[a] * n + map[b]] / sqrt(va * vb) : (a == b);
-    }
-  memcpy(r->response, p->response, sizeof r->response);
-  r->response_fitted = plan->response;
-  r->scale = exp(p->log_scale);
-  r->scale_fitted = plan->scale;
-  r->images = p->images;
-  r->exposures = malloc(p->images * sizeof *r->exposures);
-  r->exposure_sd = malloc(p->images * sizeof *r->exposure_sd);
-  if (!r->exposures || !r->exposure_sd) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t k = 0; k < p->images; ++k) r->exposures[k] = exp(p->log_exposures[k]);
-  fit_gains_sd(p, covariance, r->exposure_sd);
-  return fit_balance_of(p, plan->exposures == CF_GAINS_PER_IMAGE_RGB, covariance, r, err);
-}
-
 /* One run of fit_run_population: what its steps share. */
 typedef struct fit_run {
   const cf_capture *capture;
@@ -245,7 +184,7 @@ typedef struct fit_run {
   double tolerance; /* the solves' (0: the solver's) */
   cf_fit_result *r;
   fit_plan plan;
-  fit_problem p; /* over the whole population */
+  fit_problem *p; /* over the whole population */
   cf_lsq_summary summary;
   double sigma; /* one σ for all (no noise model) */
   int has_noise, switched;
@@ -257,7 +196,7 @@ typedef struct fit_run {
 
 /* Room in run->jtj and run->covariance for the unknowns declared now. */
 static cf_status normal_room(fit_run *run, cf_error *err) {
-  size_t n = (size_t)run->p.num_unknowns, need = n > 0 ? n * n : 1;
+  size_t n = (size_t)fit_problem_unknown_count(run->p), need = n > 0 ? n * n : 1;
   if (need <= run->normal_capacity) return CF_OK;
   free(run->jtj);
   free(run->covariance);
@@ -297,35 +236,31 @@ static cf_status find_start(fit_run *run, double *params, double *log_scale, dou
 static cf_status full_problem(fit_run *run, const double *params, double log_scale,
                               const double *response, cf_error *err) {
   const cf_fit_options *o = run->o;
-  fit_problem *p = &run->p;
-  cf_status s = fit_problem_init(p, run->capture, o->model, run->population->index,
-                                 run->population->count, fit_threads(o), err);
+  cf_status s = fit_problem_new(&run->p, run->capture, o->model, run->population->index,
+                                run->population->count, fit_threads(o), err);
   if (s != CF_OK) return s;
+  fit_problem *p = run->p;
   if (run->population->weight) s = fit_problem_set_sample_weights(p, run->population->weight, err);
-  memcpy(p->params, params, sizeof p->params);
-  p->log_scale = log_scale;
+  fit_values *v = fit_problem_values(p);
+  memcpy(v->params, params, sizeof v->params);
+  v->log_scale = log_scale;
   /* (the trust region starts anew, not where the refinement's ended: that
    * one ends with Gauss-Newton steps, a radius of 1e10 and more, but every
    * observation and their pixel footprints move the minimum; on DiLiGenT,
    * default budget, the undamped steps then kept 1 % of their promise for
    * 29 iterations while the radius halved, 48 iterations in all where 24
    * reach the same cost) */
-  p->function_tolerance = run->tolerance;
-  p->newton_start = 1; /* from the refinement's (or the best start's) minimum */
+  fit_problem_settings(p)->function_tolerance = run->tolerance;
+  fit_problem_settings(p)->newton_start = 1; /* from the refinement's (or the best start's) minimum */
   /* an unknown tone curve: the response curve is fitted from here on
    * (the starts and the subsample assume a linear response) */
   cf_capture_summary about;
   cf_capture_summarize(run->capture, &about);
   run->plan.response = about.tone_curve_unknown;
-  if (run->plan.response) memcpy(p->response, response, sizeof p->response);
-  if (s == CF_OK) s = fit_declare(p, &run->plan, err);
+  if (run->plan.response) memcpy(v->response, response, sizeof v->response);
+  if (s == CF_OK) s = fit_declare_robust(p, &run->plan, o, run->sigma, err);
   run->has_noise = fit_capture_has_noise(run->capture);
-  if (!run->has_noise) {
-    fit_problem_set_sigma(p, run->capture, run->sigma);
-    run->r->sigma = run->sigma;
-  }
-  p->loss = o->loss;
-  p->loss_scale = o->loss_scale;
+  if (!run->has_noise) run->r->sigma = run->sigma;
   return s;
 }
 
@@ -339,7 +274,7 @@ static cf_status full_problem(fit_run *run, const double *params, double log_sca
  * (docs/fitting.md "Response curve"). run->sigma stays the start's: the
  * starts' costs, which fit_ambiguous weighs, are in its units. */
 static cf_status sigma_through_curve(fit_run *run, cf_error *err) {
-  fit_problem *p = &run->p;
+  fit_problem *p = run->p;
   double tau = run->sigma, before;
   /* (no floor: at a noise-free float capture's τ, 5e-9, the response's
    * prior is 1e-20 of the data, and still counts: the blocks and the
@@ -347,15 +282,15 @@ static cf_status sigma_through_curve(fit_run *run, cf_error *err) {
    * fit_free_covariance) */
   cf_status s = fit_estimate_sigma(p, &tau, err); /* at the start's curve */
   for (int round = 0; s == CF_OK && round < TAU_ROUNDS; ++round) {
-    fit_problem_set_sigma(p, run->capture, tau);
-    s = fit_problem_reweight(p, run->capture, err);
+    fit_problem_set_sigma(p, tau);
+    s = fit_problem_reweight(p, err);
     if (s == CF_OK) s = fit_solve(p, run->o, run->o->max_iterations, &run->summary, err);
     before = tau;
     if (s == CF_OK) s = fit_estimate_sigma(p, &tau, err);
     if (s != CF_OK || fabs(tau - before) < 0.01 * before) break;
   }
   if (s == CF_OK) {
-    fit_problem_set_sigma(p, run->capture, tau);
+    fit_problem_set_sigma(p, tau);
     run->r->sigma = tau;
   }
   return s;
@@ -368,25 +303,24 @@ static cf_status sigma_through_curve(fit_run *run, cf_error *err) {
  * narrower than a pixel, at the parameters found, until the samples
  * settle. */
 static cf_status settle_weights_and_footprints(fit_run *run, cf_error *err) {
-  fit_problem *p = &run->p;
+  fit_problem *p = run->p;
   const cf_fit_options *o = run->o;
-  cf_status s = fit_footprint_update(p, run->capture, o, NULL, err);
+  cf_status s = fit_footprint_update(p, o, NULL, err);
   int weights_current = 0, vary = run->has_noise || fit_problem_sigma_through_curve(p);
   if (s == CF_OK && !run->has_noise && vary) s = sigma_through_curve(run, err);
   if (s == CF_OK && vary)
-    s = fit_solve_reweighted(p, run->capture, o, REWEIGHT_ROUNDS, &run->summary, &weights_current,
-                             err);
-  if (s == CF_OK && vary && !weights_current) s = fit_problem_reweight(p, run->capture, err);
+    s = fit_solve_reweighted(p, o, REWEIGHT_ROUNDS, &run->summary, &weights_current, err);
+  if (s == CF_OK && vary && !weights_current) s = fit_problem_reweight(p, err);
   for (int round = 0; s == CF_OK && round < FOOTPRINT_ROUNDS; ++round) {
     int changed = 0;
-    s = fit_footprint_update(p, run->capture, o, &changed, err);
+    s = fit_footprint_update(p, o, &changed, err);
     if (s != CF_OK || !changed) break;
     fit_progress(o, "integrating pixel footprints", (size_t)round, FOOTPRINT_ROUNDS);
     double decrement; /* samples that move nothing need no solve */
     s = fit_newton_decrement(p, o, &decrement, err);
     if (s != CF_OK || decrement < FIT_RESOLVE_DECREMENT) break;
     s = fit_solve(p, o, o->max_iterations, &run->summary, err);
-    if (s == CF_OK && vary) s = fit_problem_reweight(p, run->capture, err);
+    if (s == CF_OK && vary) s = fit_problem_reweight(p, err);
   }
   return s;
 }
@@ -404,7 +338,7 @@ static int capture_has_jpeg(const cf_capture *capture) {
  * covariance, into run->jtj and run->covariance, with *rank_deficient. */
 static cf_status solve_with_covariance(fit_run *run, int round, int *rank_deficient,
                                        cf_error *err) {
-  fit_problem *p = &run->p;
+  fit_problem *p = run->p;
   const cf_fit_options *o = run->o;
   int settled = 0; /* (jtj then holds the normal equations at the solution) */
   cf_status s = normal_room(run, err);
@@ -427,11 +361,31 @@ static cf_status solve_with_covariance(fit_run *run, int round, int *rank_defici
   return s;
 }
 
+/* M4: is the base seen at all? Once, after a round that found everything
+ * constrained; *again when the base is hidden (solve again, and the
+ * covariance of the film alone). */
+static cf_status test_hidden_base(fit_run *run, fit_hidden_base *hidden, int *again,
+                                  cf_error *err) {
+  cf_status s = fit_test_hidden_base(run->p, &run->plan, run->o, run->summary.final_cost, hidden,
+                                     err);
+  hidden->tested = 1;
+  *again = s == CF_OK && hidden->hidden;
+  if (*again)
+    fit_add_warning(run->r,
+                    "the photos do not show the base under the film: the film alone explains "
+                    "them (chi2 higher by %.3g with the base hidden, against BIC's price %.3g "
+                    "of its %d parameters), so the base's parameters are not constrained: "
+                    "held at their defaults, the optical depth at its upper bound (the data "
+                    "say only that the film hides the base)",
+                    hidden->gain, hidden->price, hidden->slots);
+  return s;
+}
+
 /* 4. Robust solves until every free parameter is constrained: those the
  * capture does not constrain held at their defaults, and for M4 the base
  * under the film hidden when the photos do not show it. */
 static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
-  fit_problem *p = &run->p;
+  fit_problem *p = run->p;
   const cf_fit_options *o = run->o;
   cf_status s = CF_OK;
   int rank_deficient = 0;
@@ -439,30 +393,18 @@ static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
   for (int round = 0; s == CF_OK && round < MAX_UNCONSTRAINED_ROUNDS; ++round) {
     fit_progress(o, "solving", (size_t)round, MAX_UNCONSTRAINED_ROUNDS);
     s = solve_with_covariance(run, round, &rank_deficient, err);
-    int found = 0;
+    int found = 0, again = 0;
     if (s == CF_OK)
       s = fit_find_unconstrained(p, run->jtj, run->covariance, rank_deficient, &run->plan, &found,
                                  err);
-    if (s == CF_OK && !found && !hidden.tested && !rank_deficient) {
-      /* M4: is the base seen at all? (once) */
-      s = fit_test_hidden_base(p, &run->plan, o, run->summary.final_cost, &hidden, err);
-      hidden.tested = 1;
-      if (s == CF_OK && hidden.hidden) {
-        fit_add_warning(run->r,
-                        "the photos do not show the base under the film: the film alone explains "
-                        "them (chi2 higher by %.3g with the base hidden, against BIC's price %.3g "
-                        "of its %d parameters), so the base's parameters are not constrained: "
-                        "held at their defaults, the optical depth at its upper bound (the data "
-                        "say only that the film hides the base)",
-                        hidden.gain, hidden.price, hidden.slots);
-        continue; /* solve again, and the covariance of the film alone */
-      }
-    }
+    if (s == CF_OK && !found && !hidden.tested && !rank_deficient)
+      s = test_hidden_base(run, &hidden, &again, err);
+    if (again) continue;
     if (s != CF_OK || !found) break;
-    double defaults[CF_MAX_DIM];
+    double defaults[CF_MAX_DIM], *params = fit_problem_values(p)->params;
     cf_model_default_params(o->model, defaults);
-    for (int k = 0; k < p->dim; ++k) /* held at the default */
-      if (run->plan.status[k] == CF_PARAM_UNCONSTRAINED) p->params[k] = defaults[k];
+    for (int k = 0; k < fit_problem_dim(p); ++k) /* held at the default */
+      if (run->plan.status[k] == CF_PARAM_UNCONSTRAINED) params[k] = defaults[k];
     s = fit_declare(p, &run->plan, err);
   }
   if (s == CF_OK && rank_deficient)
@@ -471,80 +413,6 @@ static cf_status solve_until_constrained(fit_run *run, cf_error *err) {
                      "parameters held");
   fit_progress(o, "solving", MAX_UNCONSTRAINED_ROUNDS, MAX_UNCONSTRAINED_ROUNDS);
   return s;
-}
-
-/* Photo values that cannot be radiance, left out when the capture was
- * loaded: a warning in the fit's own list when they are more than a trace
- * in some image (the capture's warnings say where). */
-static void warn_not_radiance(const cf_capture *capture, cf_fit_result *r) {
-  size_t total = 0, images = 0, worst = 0;
-  double worst_share = 0.0;
-  for (size_t k = 0; k < cf_capture_image_count(capture); ++k) {
-    const cf_capture_image *image = cf_capture_image_at(capture, k);
-    double share = (double)image->not_radiance /
-                   fmax(1.0, (double)(image->observations + image->not_radiance));
-    total += image->not_radiance;
-    if (share <= CF_NOT_RADIANCE_TRACE) continue;
-    ++images;
-    if (share > worst_share) worst_share = share, worst = k;
-  }
-  if (images > 0)
-    fit_add_warning(r,
-                    "%zu pixels on the sphere hold values that cannot be radiance and were left "
-                    "out, more than a trace in %zu of the %zu images (most: %.32s, %.2g %%); "
-                    "see residuals.per_image[].not_radiance",
-                    total, images, cf_capture_image_count(capture),
-                    cf_capture_image_at(capture, worst)->name, 100.0 * worst_share);
-}
-
-/* 5. The result: the values, their covariance, the solver's summary and
- * the warnings it calls for. */
-static cf_status report_result(fit_run *run, cf_error *err) {
-  const fit_problem *p = &run->p;
-  const cf_fit_options *o = run->o;
-  cf_fit_result *r = run->r;
-  cf_status s = fill_result(p, &run->plan, run->covariance, r, err);
-  if (s == CF_OK) s = fit_light_gains_of(run->capture, p, run->covariance, r, err);
-  if (s != CF_OK) return s;
-  r->cost = run->summary.final_cost;
-  r->iterations = p->iterations;
-  r->solves = p->solves;
-  memcpy(r->trace, p->trace, (size_t)p->trace_count * sizeof *p->trace);
-  r->trace_count = p->trace_count;
-  const char *termination = cf_lsq_termination_name(run->summary.ending);
-  snprintf(r->termination, sizeof r->termination, "%s", termination);
-  r->solve_seconds = p->solver_seconds;
-  if (run->summary.ending == CF_LSQ_END_OUT_OF_ITERATIONS)
-    fit_add_warning(r,
-                    "the last solve ended without converging (%s after its %d iterations "
-                    "at most): the values may be short of the minimum; raise "
-                    "--max-iterations%s",
-                    termination, o->max_iterations,
-                    run->population->weight ? ", or the pixel budget (a small sample may not "
-                                              "show the highlight well enough to fit it)"
-                                            : "");
-  fit_footprint_tally(p, &r->footprint_observations, &r->footprint_samples, &r->footprint_max);
-  r->ambiguous = fit_ambiguous(r, o->model, run->has_noise ? 1.0 : run->sigma * run->sigma);
-  if (r->ambiguous)
-    fit_add_warning(r,
-                    "on the multi-start's subsample two starts far apart ended within "
-                    "the noise of each other (see starts); the fit on all observations "
-                    "went on from the best: see its sd and correlations");
-  warn_not_radiance(run->capture, r);
-  cf_capture_summary summary_of_capture;
-  cf_capture_summarize(run->capture, &summary_of_capture);
-  if (summary_of_capture.radiometry_relative && fit_scale_slot(o->model) < 0)
-    fit_add_warning(r,
-                    "the capture's radiometry is relative and %s has no interface F0 to "
-                    "fix the scale: its albedo is in the lights' relative units",
-                    cf_model_info_get(o->model)->code);
-  else if (summary_of_capture.tone_curve_unknown && fit_scale_slot(o->model) < 0)
-    fit_add_warning(r,
-                    "the photos' tone curve is unknown and %s has no interface F0 to fix "
-                    "the level: its albedo trades with the response curve's stretch and is "
-                    "in relative units",
-                    cf_model_info_get(o->model)->code);
-  return CF_OK;
 }
 
 /* Steps 3 (on every observation) to 5, from the refined values; JPEG
@@ -561,10 +429,45 @@ static cf_status solve_population(fit_run *run, const double *params, double log
   if (s == CF_OK) s = settle_weights_and_footprints(run, err);
   if (s == CF_OK) s = solve_until_constrained(run, err);
   if (s == CF_OK && !run->o->jpeg_plain && fit_jpeg_modelled(run->capture)) {
-    s = fit_jpeg_correct(&run->p, run->capture, run->o, run->r, err);
+    s = fit_jpeg_correct(run->p, run->capture, run->o, run->r, err);
     if (s == CF_OK) s = solve_until_constrained(run, err);
   }
-  if (s == CF_OK) s = report_result(run, err);
+  if (s == CF_OK)
+    s = fit_outcome(run->p, &run->plan, run->covariance, &run->summary, run->o,
+                    run->population->weight != NULL,
+                    run->has_noise ? 1.0 : run->sigma * run->sigma, run->r, err);
+  return s;
+}
+
+/* 2. the start; 3. a larger subsample, then the whole population, timed
+ * by stage. */
+static cf_status run_stages(fit_run *run, cf_error *err) {
+  const cf_fit_options *o = run->o;
+  cf_fit_result *r = run->r;
+  double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
+  double clock = cf_now_seconds(), then;
+  cf_status s = find_start(run, params, &log_scale, response, err);
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
+  clock = then;
+  /* a given start is already a fit (the model choice's, on about 22 000
+   * observations): refining it on 40 000 first saves the full solve nothing
+   * (DiLiGenT: 43 + 27 iterations against 26, the same minimum within 0.05
+   * sd, 10 % less CPU) */
+  if (!o->use_start)
+    s = refine_on_subsample(run->capture, run->population, o, &run->plan, REFINE_TARGET,
+                            run->sigma, params, &log_scale, r, &run->switched, err);
+  if (s == CF_OK) /* an unknown tone curve: the curve's shape from a few starts */
+    s = fit_response_starts(run->capture, run->population, o, &run->plan, run->sigma, params,
+                            &log_scale, response, err);
+  if (s != CF_OK) return s;
+  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
+  clock = then;
+  s = solve_population(run, params, log_scale, response, err);
+  r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = cf_now_seconds()) - clock;
+  clock = then;
+  if (s == CF_OK) s = fit_statistics(run->p, o, r, err);
+  r->stage_seconds[CF_FIT_STAGE_STATISTICS] = cf_now_seconds() - clock;
   return s;
 }
 
@@ -584,69 +487,33 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
   fit_plan_for(capture, o, &run.plan);
   if (cf_capture_observations(capture)->count == 0 || population->count == 0)
     return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
-
-  /* 2. the start; 3. a larger subsample, then the whole population */
-  double params[CF_MAX_DIM], log_scale, response[CF_RESPONSE_MODEL_KNOTS];
-  double clock = cf_now_seconds(), then;
-  s = find_start(&run, params, &log_scale, response, err);
-  if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_START] = (then = cf_now_seconds()) - clock;
-  clock = then;
-  /* a given start is already a fit (the model choice's, on about 22 000
-   * observations): refining it on 40 000 first saves the full solve nothing
-   * (DiLiGenT: 43 + 27 iterations against 26, the same minimum within 0.05
-   * sd, 10 % less CPU) */
-  if (!o->use_start)
-    s = refine_on_subsample(capture, population, o, &run.plan, REFINE_TARGET, run.sigma, params,
-                            &log_scale, r, &run.switched, err);
-  if (s == CF_OK) /* an unknown tone curve: the curve's shape from a few starts */
-    s = fit_response_starts(capture, population, o, &run.plan, run.sigma, params, &log_scale,
-                            response, err);
-  if (s != CF_OK) return s;
-  r->stage_seconds[CF_FIT_STAGE_REFINE] = (then = cf_now_seconds()) - clock;
-  clock = then;
-  s = solve_population(&run, params, log_scale, response, err);
-  r->stage_seconds[CF_FIT_STAGE_SOLVE] = (then = cf_now_seconds()) - clock;
-  clock = then;
-  if (s == CF_OK) s = fit_statistics(&run.p, o, r, err);
-  r->stage_seconds[CF_FIT_STAGE_STATISTICS] = cf_now_seconds() - clock;
+  s = run_stages(&run, err);
   free(run.jtj);
   free(run.covariance);
-  fit_problem_release(&run.p);
+  fit_problem_free(run.p);
   if (s != CF_OK) cf_fit_result_free(r);
+  return s;
+}
+
+cf_status fit_run_budget(const cf_capture *capture, const fit_budget *budget,
+                         const cf_fit_options *o, cf_fit_result *r, cf_error *err) {
+  cf_status s = fit_run_population(capture, &budget->population, o, 0.0, r, err);
+  if (s == CF_OK && budget->sample.weight) {
+    r->sample_count = budget->sample.count;
+    r->population_count = budget->in_use;
+    r->sampling = o->sampling;
+  }
   return s;
 }
 
 cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_result *r,
                      cf_error *err) {
   memset(r, 0, sizeof *r);
-  fit_population population;
-  uint32_t *index;
-  fit_sample budget = {0};
+  fit_budget budget;
+  cf_status s = fit_budget_for(capture, o, &budget, err);
   /* (a start of its own: cf_fit_auto's chosen model, checked before) */
-  cf_status s = o->use_start ? CF_OK : cf_fit_check_gains(capture, o, err);
-  if (s != CF_OK) return s;
-  s = fit_population_of_images(capture, o->use_image, &population, &index, err);
-  size_t in_use = s == CF_OK ? population.count : 0;
-  if (s == CF_OK && o->budget > 0 && o->budget < population.count) { /* a pixel budget */
-    if ((unsigned)o->sampling >= CF_SAMPLING_COUNT)
-      s = cf_error_set(err, CF_EINVAL, "invalid sampling %d", (int)o->sampling);
-    size_t images = cf_capture_image_count(capture);
-    if (s == CF_OK && o->fit_exposures && images > 1) /* every free gain its own observations */
-      s = fit_budget_draw_images(cf_capture_observations(capture), &population, images, o->budget,
-                                 FIT_GAIN_FLOOR, o->sampling, &budget, err);
-    else if (s == CF_OK)
-      s = fit_budget_draw(cf_capture_observations(capture), &population, o->budget, o->sampling,
-                          &budget, err);
-    if (s == CF_OK) population = (fit_population){budget.index, budget.count, budget.weight};
-  }
-  if (s == CF_OK) s = fit_run_population(capture, &population, o, 0.0, r, err);
-  if (s == CF_OK && budget.weight) {
-    r->sample_count = budget.count;
-    r->population_count = in_use;
-    r->sampling = o->sampling;
-  }
-  fit_sample_free(&budget);
-  free(index);
+  if (s == CF_OK && !o->use_start) s = fit_check_gains(capture, o, &budget, err);
+  if (s == CF_OK) s = fit_run_budget(capture, &budget, o, r, err);
+  fit_budget_free(&budget);
   return s;
 }

@@ -13,6 +13,7 @@
 
 #include "clayfit/model.h"
 #include "core/clock.h"
+#include "fit_gains.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
@@ -437,22 +438,10 @@ static void state_reading(cf_fit_choice *choice, const cf_fit_result *result) {
   cf_fit_reading(result, choice->reading, sizeof choice->reading);
 }
 
-cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
-                      cf_fit_choice *choice, cf_fit_result *result, cf_error *err) {
-  memset(choice, 0, sizeof *choice);
-  memset(result, 0, sizeof *result);
-  choice->automatic = 1;
-  choice->bic_margin = CF_FIT_CHOICE_BIC_MARGIN;
-  choice->heldout_margin = CF_FIT_CHOICE_HELDOUT_MARGIN;
-  choice->heldout_guard = CF_FIT_CHOICE_HELDOUT_GUARD;
-  choice->loss = options[0].loss;
-  choice->loss_scale = options[0].loss_scale;
-  if (cf_capture_observations(capture)->count == 0)
-    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
-  /* the gains told from the material before any fit (the albedo's trade,
-   * which every model of the ladder has: M0's) */
-  cf_status gains = cf_fit_check_gains(capture, &options[CF_MODEL_LAMBERT], err);
-  if (gains != CF_OK) return gains;
+/* The candidates fitted on a training split and scored on held-out
+ * images, and the rule's choice (choice->chosen). */
+static cf_status choose(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
+                        cf_fit_choice *choice, cf_error *err) {
   double clock = cf_now_seconds();
   int exposures = 0;
   for (int m = 0; m < CF_MODEL_COUNT; ++m) exposures |= options[m].fit_exposures;
@@ -470,9 +459,14 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   if (s == CF_OK) fit_choice_decide(choice);
   split_free(&split);
   choice->seconds = cf_now_seconds() - clock;
-  if (s != CF_OK) return s;
+  return s;
+}
 
-  /* the chosen model on every observation, from its candidate fit */
+/* The chosen model on every observation (the budget's, drawn before, when
+ * its options draw the same), from its candidate fit. */
+static cf_status fit_chosen(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
+                            const fit_budget *budget, cf_fit_choice *choice,
+                            cf_fit_result *result, cf_error *err) {
   const cf_fit_candidate *c = cf_fit_choice_chosen(choice);
   cf_fit_options o = options[c->model];
   o.model = c->model;
@@ -480,7 +474,9 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   memcpy(o.start, c->fit.params, sizeof o.start);
   o.start_scale = c->fit.scale;
   memcpy(o.start_response, c->fit.response, sizeof o.start_response);
-  s = cf_fit_run(capture, &o, result, err);
+  cf_status s = fit_budget_same(&o, &options[CF_MODEL_LAMBERT])
+                    ? fit_run_budget(capture, budget, &o, result, err)
+                    : cf_fit_run(capture, &o, result, err);
   if (s != CF_OK) return s;
   result->starts = c->fit.starts;
   memcpy(result->start, c->fit.start, sizeof result->start);
@@ -494,6 +490,30 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   }
   state_reading(choice, result);
   return CF_OK;
+}
+
+cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF_MODEL_COUNT],
+                      cf_fit_choice *choice, cf_fit_result *result, cf_error *err) {
+  memset(choice, 0, sizeof *choice);
+  memset(result, 0, sizeof *result);
+  choice->automatic = 1;
+  choice->bic_margin = CF_FIT_CHOICE_BIC_MARGIN;
+  choice->heldout_margin = CF_FIT_CHOICE_HELDOUT_MARGIN;
+  choice->heldout_guard = CF_FIT_CHOICE_HELDOUT_GUARD;
+  choice->loss = options[0].loss;
+  choice->loss_scale = options[0].loss_scale;
+  if (cf_capture_observations(capture)->count == 0)
+    return cf_error_set(err, CF_EINVAL, "the capture has no observations to fit");
+  /* the pixel budget, drawn once; the gains told from the material before
+   * any fit (the albedo's trade, which every model of the ladder has:
+   * M0's) */
+  fit_budget budget;
+  cf_status s = fit_budget_for(capture, &options[CF_MODEL_LAMBERT], &budget, err);
+  if (s == CF_OK) s = fit_check_gains(capture, &options[CF_MODEL_LAMBERT], &budget, err);
+  if (s == CF_OK) s = choose(capture, options, choice, err);
+  if (s == CF_OK) s = fit_chosen(capture, options, &budget, choice, result, err);
+  fit_budget_free(&budget);
+  return s;
 }
 
 void cf_fit_choice_free(cf_fit_choice *choice) {

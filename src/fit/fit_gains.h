@@ -7,6 +7,7 @@
 #define CLAYFIT_FIT_GAINS_H
 
 #include "fit_problem.h"
+#include "fit_sample.h"
 
 /* The refusal's threshold: a gain whose predicted standard deviation is
  * above 10 % is not told from the material (issue 17). */
@@ -26,11 +27,16 @@ void fit_gains_sd(const fit_problem *p, const double *covariance, double *sd);
 cf_status fit_balance_of(const fit_problem *p, int fitted, const double *covariance,
                          cf_fit_result *r, cf_error *err);
 
-/* The gains per light inside the sums (FIT_LOG_LIGHT free; else nothing)
+/* The gains per light inside the sums (fit_kind_light free; else nothing)
  * into r (light_count, light_gains, light_gains_sd, light_names:
  * allocated): g_l, g_l sd(log g_l) (the last light's variance the sum of
  * the others' covariance) and each light's cf_capture_light_name. */
-cf_status fit_light_gains_of(const cf_capture *capture, const fit_problem *p,
-                             const double *covariance, cf_fit_result *r, cf_error *err);
+cf_status fit_light_gains_of(const fit_problem *p, const double *covariance, cf_fit_result *r,
+                             cf_error *err);
+
+/* cf_fit_check_gains on the observations of a budget drawn for the fit
+ * (fit_budget_for with these options), before the fit. */
+cf_status fit_check_gains(const cf_capture *capture, const cf_fit_options *o,
+                          const fit_budget *budget, cf_error *err);
 
 #endif /* CLAYFIT_FIT_GAINS_H */

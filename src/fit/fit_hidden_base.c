@@ -17,21 +17,21 @@ static int is_free(cf_param_status status) {
 /* χ² of the base's whole contribution at the current values: the model
  * against its top specular alone. */
 static cf_status base_contribution(fit_problem *p, double *chi2, cf_error *err) {
-  size_t n = 3 * p->count;
-  double *full = malloc(n * sizeof *full), *top = malloc(n * sizeof *top);
-  double *measured = malloc(n * sizeof *measured);
+  size_t n = 3 * fit_problem_count(p);
+  const double *root = fit_problem_sample_roots(p), *inv_sigma = fit_problem_inv_sigma(p);
+  double *full = malloc((n ? n : 1) * sizeof *full), *top = malloc((n ? n : 1) * sizeof *top);
+  double *measured = malloc((n ? n : 1) * sizeof *measured);
   cf_status s = full && top && measured ? fit_problem_predict(p, full, measured, err)
                                         : cf_error_set(err, CF_ENOMEM, "out of memory");
-  double saved[3];
-  memcpy(saved, p->params + CF_CLAY_OPTICAL_DEPTH, sizeof saved);
-  for (int c = 0; c < 3; ++c) p->params[CF_CLAY_OPTICAL_DEPTH + c] = 400.0;
+  double saved[3], *params = fit_problem_values(p)->params;
+  memcpy(saved, params + CF_CLAY_OPTICAL_DEPTH, sizeof saved);
+  for (int c = 0; c < 3; ++c) params[CF_CLAY_OPTICAL_DEPTH + c] = 400.0;
   if (s == CF_OK) s = fit_problem_predict(p, top, measured, err);
-  memcpy(p->params + CF_CLAY_OPTICAL_DEPTH, saved, sizeof saved);
+  memcpy(params + CF_CLAY_OPTICAL_DEPTH, saved, sizeof saved);
   *chi2 = 0.0;
   for (size_t i = 0; s == CF_OK && i < n; ++i) {
     if (fit_problem_censored(p, i, full[i], measured[i])) continue;
-    double root = p->sample_root ? p->sample_root[i / 3] : 1.0;
-    double d = (full[i] - top[i]) * p->inv_sigma[i] * root;
+    double d = (full[i] - top[i]) * inv_sigma[i] * (root ? root[i / 3] : 1.0);
     *chi2 += d * d;
   }
   free(full);
@@ -40,49 +40,38 @@ static cf_status base_contribution(fit_problem *p, double *chi2, cf_error *err) 
   return s;
 }
 
-cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_options *o, double cost,
-                               fit_hidden_base *out, cf_error *err) {
-  memset(out, 0, sizeof *out);
-  /* M4 and M4T (whose vector starts with M4's) */
-  if (cf_model_info_get(p->model)->ggx_twin != CF_MODEL_CLAY) return CF_OK;
-  for (int k = 0; k < CF_CLAY_DIM; ++k) out->slots += is_base_slot(k) && is_free(plan->status[k]);
-  if (out->slots == 0) return CF_OK;
-  size_t n = 3 * p->count;
-  cf_status s = base_contribution(p, &out->visible, err);
-  if (s != CF_OK || out->visible > 100.0 * (double)n) return s;
-  out->tested = 1;
-  out->price = out->slots * log((double)n);
-
-  /* the film alone: the base hidden under τ at its bound */
-  double params[CF_MAX_DIM], log_scale = p->log_scale, response[CF_RESPONSE_MODEL_KNOTS];
-  memcpy(response, p->response, sizeof response);
-  size_t unknowns = (size_t)p->num_unknowns;
-  memcpy(params, p->params, sizeof params);
-  int *at_bound = malloc((unknowns ? unknowns : 1) * sizeof *at_bound);
-  double *log_exposures = malloc((p->images ? p->images : 1) * sizeof *log_exposures);
-  double *log_balance = malloc(3 * (p->images ? p->images : 1) * sizeof *log_balance);
-  double *log_light = malloc((p->light_count ? p->light_count : 1) * sizeof *log_light);
-  if (!at_bound || !log_exposures || !log_balance || !log_light) {
-    free(at_bound);
-    free(log_exposures);
-    free(log_balance);
-    free(log_light);
-    return cf_error_set(err, CF_ENOMEM, "out of memory");
-  }
-  memcpy(at_bound, p->at_bound, unknowns * sizeof *at_bound);
-  memcpy(log_exposures, p->log_exposures, p->images * sizeof *log_exposures);
-  memcpy(log_balance, p->log_balance, 3 * p->images * sizeof *log_balance);
-  memcpy(log_light, p->log_light, p->light_count * sizeof *log_light);
-  fit_plan alone = *plan;
-  double defaults[CF_MAX_DIM];
-  cf_model_default_params(p->model, defaults);
+/* The film alone: the base's free slots held (τ at its upper bound,
+ * where the film hides the base; the others at their defaults), into
+ * `alone` and p's values. */
+static void hide_base(fit_problem *p, const fit_plan *plan, fit_plan *alone) {
+  double defaults[CF_MAX_DIM], *params = fit_problem_values(p)->params;
+  cf_model_default_params(fit_problem_model(p), defaults);
   double tau_upper = cf_param_info_get(CF_PARAM_OPTICAL_DEPTH)->upper;
+  *alone = *plan;
   for (int k = 0; k < CF_CLAY_DIM; ++k) {
     if (!is_base_slot(k) || !is_free(plan->status[k])) continue;
-    alone.status[k] = CF_PARAM_UNCONSTRAINED;
-    p->params[k] =
-        k >= CF_CLAY_OPTICAL_DEPTH && k < CF_CLAY_OPTICAL_DEPTH + 3 ? tau_upper : defaults[k];
+    alone->status[k] = CF_PARAM_UNCONSTRAINED;
+    params[k] = k >= CF_CLAY_OPTICAL_DEPTH && k < CF_CLAY_OPTICAL_DEPTH + 3 ? tau_upper : defaults[k];
   }
+}
+
+/* The film alone, fitted and compared by BIC with the fit of cost `cost`:
+ * adopted (its plan into *plan) when the base is not seen, else the
+ * problem back where the test began (its values and pins). */
+static cf_status compare_film_alone(fit_problem *p, fit_plan *plan, const cf_fit_options *o,
+                                    double cost, fit_hidden_base *out, cf_error *err) {
+  size_t unknowns = (size_t)fit_problem_unknown_count(p);
+  int *at_bound = malloc((unknowns ? unknowns : 1) * sizeof *at_bound);
+  fit_values saved = {0};
+  cf_status s = at_bound ? fit_values_save(p, &saved, err)
+                         : cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s != CF_OK) {
+    free(at_bound);
+    return s;
+  }
+  memcpy(at_bound, fit_problem_read_at_bound(p), unknowns * sizeof *at_bound);
+  fit_plan alone;
+  hide_base(p, plan, &alone);
   cf_lsq_summary summary;
   s = fit_declare(p, &alone, err);
   if (s == CF_OK) s = fit_solve(p, o, o->max_iterations, &summary, err);
@@ -93,19 +82,27 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   if (s == CF_OK && out->hidden) {
     *plan = alone;
   } else { /* the base stays: back to where the test began */
-    memcpy(p->params, params, sizeof params);
-    p->log_scale = log_scale;
-    memcpy(p->response, response, sizeof response);
-    memcpy(p->log_exposures, log_exposures, p->images * sizeof *log_exposures);
-    memcpy(p->log_balance, log_balance, 3 * p->images * sizeof *log_balance);
-    memcpy(p->log_light, log_light, p->light_count * sizeof *log_light);
+    fit_values_restore(p, &saved);
     cf_status restored = fit_declare(p, plan, err);
-    if (restored == CF_OK) memcpy(p->at_bound, at_bound, unknowns * sizeof *at_bound);
+    if (restored == CF_OK) memcpy(fit_problem_at_bound(p), at_bound, unknowns * sizeof *at_bound);
     if (s == CF_OK) s = restored;
   }
   free(at_bound);
-  free(log_exposures);
-  free(log_balance);
-  free(log_light);
+  fit_values_free(&saved);
   return s;
+}
+
+cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_options *o, double cost,
+                               fit_hidden_base *out, cf_error *err) {
+  memset(out, 0, sizeof *out);
+  /* M4 and M4T (whose vector starts with M4's) */
+  if (cf_model_info_get(fit_problem_model(p))->ggx_twin != CF_MODEL_CLAY) return CF_OK;
+  for (int k = 0; k < CF_CLAY_DIM; ++k) out->slots += is_base_slot(k) && is_free(plan->status[k]);
+  if (out->slots == 0) return CF_OK;
+  size_t n = 3 * fit_problem_count(p);
+  cf_status s = base_contribution(p, &out->visible, err);
+  if (s != CF_OK || out->visible > 100.0 * (double)n) return s;
+  out->tested = 1;
+  out->price = out->slots * log((double)n);
+  return compare_film_alone(p, plan, o, cost, out, err);
 }

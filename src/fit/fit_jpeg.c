@@ -19,6 +19,7 @@
 #include "clayfit/image.h"
 #include "core/rng.h"
 #include "fit_plan.h"
+#include "fit_sample.h"
 #include "core/parallel.h"
 
 int fit_jpeg_modelled(const cf_capture *capture) {
@@ -33,22 +34,27 @@ int fit_jpeg_modelled(const cf_capture *capture) {
  * rest of the codec's model and moved no value by more than 0.06 sd
  * (a 16-image M4 capture with a film roughness of 0.15). */
 static cf_status problem_of_image(const fit_problem *p, const cf_capture *capture, size_t k,
-                                  int threads, fit_problem *q, uint32_t **index, cf_error *err) {
-  unsigned char *use = calloc(p->images, 1);
+                                  int threads, fit_problem **q, uint32_t **index, cf_error *err) {
+  *q = NULL;
+  unsigned char *use = calloc(fit_problem_images(p), 1);
   if (!use) return cf_error_set(err, CF_ENOMEM, "out of memory");
   use[k] = 1;
   fit_population population;
   cf_status s = fit_population_of_images(capture, use, &population, index, err);
   free(use);
   if (s == CF_OK)
-    s = fit_problem_init(q, capture, p->model, population.index, population.count, threads, err);
+    s = fit_problem_new(q, capture, fit_problem_model(p), population.index, population.count,
+                        threads, err);
   if (s != CF_OK) return s;
-  fit_problem_copy_values(q, p);
-  fit_problem_clear_unknowns(q);
-  s = fit_problem_finish(q, err);
-  if (s == CF_OK) fit_problem_set_sigma(q, capture, p->sigma);
-  if (s == CF_OK) s = fit_problem_reweight(q, capture, err); /* σ at the prediction */
-  if (s != CF_OK) fit_problem_release(q);
+  fit_problem_copy_values(*q, p);
+  fit_problem_clear_unknowns(*q);
+  s = fit_problem_finish(*q, err);
+  if (s == CF_OK) fit_problem_set_sigma(*q, fit_problem_sigma(p));
+  if (s == CF_OK) s = fit_problem_reweight(*q, err); /* σ at the prediction */
+  if (s != CF_OK) {
+    fit_problem_free(*q);
+    *q = NULL;
+  }
   return s;
 }
 
@@ -158,7 +164,9 @@ static cf_status crop_to_sphere(size_t n, image_coding *c, cf_error *err) {
 /* The prediction, σ and pixel of every observation of q. */
 static cf_status predict(const fit_problem *q, const uint32_t *index, image_coding *c,
                          cf_error *err) {
-  size_t n = q->count, m = n ? n : 1;
+  size_t n = fit_problem_count(q), m = n ? n : 1;
+  const cf_observations *obs = cf_capture_observations(fit_problem_capture(q));
+  const double *inv_sigma = fit_problem_inv_sigma(q);
   double *measured = malloc(3 * m * sizeof *measured);
   c->at = malloc(m * sizeof *c->at);
   c->prediction = malloc(3 * m * sizeof *c->prediction);
@@ -170,11 +178,11 @@ static cf_status predict(const fit_problem *q, const uint32_t *index, image_codi
                     ? fit_problem_predict(q, c->prediction, measured, err)
                     : cf_error_set(err, CF_ENOMEM, "out of memory");
   for (size_t i = 0; s == CF_OK && i < n; ++i) {
-    c->at[i] = pixel_of(q->obs, index[i], c->stored.width, c->stored.height);
+    c->at[i] = pixel_of(obs, index[i], c->stored.width, c->stored.height);
     for (int ch = 0; ch < 3; ++ch) {
       size_t v = 3 * i + (size_t)ch;
       c->linear[v] = c->prediction[v];
-      c->spread[v] = 1.0 / q->inv_sigma[v];
+      c->spread[v] = 1.0 / inv_sigma[v];
       if (!c->response) continue;
       c->linear[v] = c->prediction[v] > 0.0
                          ? cf_response_model_inverse(c->response, NULL, c->prediction[v], NULL)
@@ -259,7 +267,7 @@ static void corrected_values(const fit_problem *q, const uint32_t *index, const 
                         (float)c->decode.clip_level};
   double clip[3];
   cf_decode_pixel(&c->decode, top, 3, clip);
-  for (size_t i = 0; i < q->count; ++i) {
+  for (size_t i = 0; i < fit_problem_count(q); ++i) {
     size_t o = index[i];
     if (c->at[i] == SIZE_MAX) continue;
     ++tally->count;
@@ -294,20 +302,21 @@ typedef struct coding_work {
 static void correct_image(void *user, int j) {
   coding_work *w = user;
   size_t k = w->image[j];
-  fit_problem q;
+  fit_problem *q;
   uint32_t *index = NULL;
   cf_error *err = &w->err[j];
   cf_status s = problem_of_image(w->p, w->capture, k, w->threads, &q, &index, err);
   if (s == CF_OK) {
     image_coding c = {0};
-    c.response = q.response_on ? q.response : NULL;
+    c.response = fit_problem_response_on(q) ? fit_problem_read_values(q)->response : NULL;
     s = cf_capture_read_stored(w->capture, k, &c.stored, &c.decode, err);
     if (s == CF_OK) code_tables(&c);
-    if (s == CF_OK) s = predict(&q, index, &c, err);
-    if (s == CF_OK) s = code_draws(cf_capture_image_at(w->capture, k), k, q.count, &c, err);
-    if (s == CF_OK) corrected_values(&q, index, &c, w->y, w->flags, &w->tally[j]);
+    if (s == CF_OK) s = predict(q, index, &c, err);
+    if (s == CF_OK)
+      s = code_draws(cf_capture_image_at(w->capture, k), k, fit_problem_count(q), &c, err);
+    if (s == CF_OK) corrected_values(q, index, &c, w->y, w->flags, &w->tally[j]);
     coding_free(&c);
-    fit_problem_release(&q);
+    fit_problem_free(q);
   }
   free(index);
   w->status[j] = s;
@@ -359,11 +368,7 @@ cf_status fit_jpeg_correct(fit_problem *p, const cf_capture *capture, const cf_f
     cf_parallel_for(count, count >= threads ? threads : 1, correct_image, &w);
     s = gather(&w, count, r, err);
   }
-  for (size_t i = 0; s == CF_OK && i < p->count; ++i) { /* the problem's rows */
-    size_t row = p->index ? p->index[i] : i;
-    for (int c = 0; c < 3; ++c) p->y[3 * i + (size_t)c] = w.y[3 * row + (size_t)c];
-    p->flags[i] = w.flags[row];
-  }
+  if (s == CF_OK) fit_problem_set_measured(p, w.y, w.flags); /* the problem's rows */
   free(w.y), free(w.flags), free(image), free(w.tally), free(w.status), free(w.err);
   return s;
 }

@@ -7,8 +7,8 @@
 
 #include "core/order_statistics.h"
 #include "fit_residuals.h"
+#include "fit_sample.h"
 #include "fit_starts.h"
-#include "lsq/lsq.h"
 #include "core/parallel.h"
 
 /* Every start runs to convergence (START_ITERATIONS at most) on a
@@ -35,7 +35,8 @@ enum { SUBSAMPLE_TARGET = 4000, START_ITERATIONS = 300 };
 /* ρ per channel of a Lambertian fit to the least specular half of the
  * observations (those whose half vector is farthest from the normal). */
 static void lambert_albedo(const fit_problem *p, double rho[3]) {
-  size_t n = p->count;
+  size_t n = fit_problem_count(p);
+  const double *y = fit_problem_measured(p);
   double *specularity = malloc(n * sizeof *specularity), *sorted = malloc(n * sizeof *sorted);
   rho[0] = rho[1] = rho[2] = 0.5;
   if (!specularity || !sorted || n == 0) {
@@ -45,23 +46,24 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
   }
   for (size_t i = 0; i < n; ++i) {
     double most = 0.0;
-    size_t first, slots = fit_problem_slot_range(p, i, &first);
-    for (size_t pair = first; pair < first + slots; ++pair) {
-      const cf_geometry *g = &p->geometry[pair];
-      if (cf_geometry_is_lit(g)) most = fmax(most, g->cos2_h);
-    }
+    const cf_geometry *g;
+    const double *w;
+    size_t slots = fit_problem_pairs(p, i, &g, &w);
+    for (size_t j = 0; j < slots; ++j)
+      if (cf_geometry_is_lit(&g[j])) most = fmax(most, g[j].cos2_h);
     specularity[i] = sorted[i] = most;
   }
   double threshold = order_kth_smallest(sorted, n, n / 2); /* the median */
   double num[3] = {0}, den[3] = {0};
   for (size_t i = 0; i < n; ++i) {
     if (specularity[i] > threshold) continue;
-    size_t k = p->index ? p->index[i] : i, first, slots = fit_problem_slot_range(p, i, &first);
+    const cf_geometry *g;
+    const double *w;
+    size_t slots = fit_problem_pairs(p, i, &g, &w);
     for (int c = 0; c < 3; ++c) {
       double q = 0.0; /* the Lambertian prediction with ρ = 1 */
-      for (size_t pair = first; pair < first + slots; ++pair)
-        q += p->weight[3 * pair + (size_t)c] / 3.14159265358979;
-      num[c] += p->obs->rgb[3 * k + (size_t)c] * q;
+      for (size_t j = 0; j < slots; ++j) q += w[3 * j + (size_t)c] / 3.14159265358979;
+      num[c] += y[3 * i + (size_t)c] * q;
       den[c] += q * q;
     }
   }
@@ -74,11 +76,12 @@ static void lambert_albedo(const fit_problem *p, double rho[3]) {
  * the albedo inside [0, 1]); held slots at their held values. */
 void fit_base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_options *o,
                     double *params, double *log_scale) {
-  const cf_model_info *m = cf_model_info_get(p->model);
-  cf_model_default_params(p->model, params);
+  cf_model_id model = fit_problem_model(p);
+  const cf_model_info *m = cf_model_info_get(model);
+  cf_model_default_params(model, params);
   for (int k = 0; k < m->dim; ++k)
     if (plan->status[k] != CF_PARAM_FITTED && o->hold[k]) params[k] = o->hold_value[k];
-  int sk = fit_scale_slot(p->model);
+  int sk = fit_scale_slot(model);
   if (sk >= 0 && plan->status[sk] == CF_PARAM_HELD_FOR_SCALE && !o->hold[sk])
     params[sk] = FIT_SCALE_F0;
   double rho[3];
@@ -116,7 +119,7 @@ typedef struct earlier_ends {
 } earlier_ends;
 
 static int within_noise(const earlier_ends *e, int j, const double *x, double cost) {
-  int n = e->p->num_unknowns;
+  int n = fit_problem_unknown_count(e->p);
   const double *end = e->x + (size_t)j * (size_t)n, *h = e->h + (size_t)j * (size_t)n * (size_t)n;
   if (!(e->sigma2[j] > 0.0) || !isfinite(h[0]) || cost > e->cost[j] + 2.0 * e->sigma2[j]) return 0;
   double quadratic = 0.0;
@@ -131,12 +134,13 @@ static int within_noise(const earlier_ends *e, int j, const double *x, double co
 static int reached_earlier_end(void *user, const double *x, double cost) {
   const earlier_ends *e = user;
   const fit_problem *p = e->p;
+  int n = fit_problem_unknown_count(p);
   for (int j = 0; j < e->count; ++j) {
-    const double *end = e->x + (size_t)j * (size_t)p->num_unknowns;
+    const double *end = e->x + (size_t)j * (size_t)n;
     int near = 1;
-    for (int i = 0; i < p->num_unknowns && near; ++i) {
-      double width =
-          isfinite(p->lower[i]) && isfinite(p->upper[i]) ? p->upper[i] - p->lower[i] : 1.0;
+    for (int i = 0; i < n && near; ++i) {
+      double lower = fit_problem_lower(p, i), upper = fit_problem_upper(p, i);
+      double width = isfinite(lower) && isfinite(upper) ? upper - lower : 1.0;
       near = fabs(x[i] - end[i]) <= START_SAME_BASIN * width;
     }
     if (near || within_noise(e, j, x, cost)) return 1;
@@ -144,11 +148,10 @@ static int reached_earlier_end(void *user, const double *x, double cost) {
   return 0;
 }
 
-/* One start, on a copy of the subsample's problem with its own values
- * (the copy shares the problem's arrays, which a solve only reads, but for
- * the exposures and the white balance, which it writes). */
+/* One start, on a fork of the subsample's problem (fit_problem_fork: its
+ * observations shared, its values its own). */
 typedef struct start_job {
-  fit_problem problem;
+  fit_problem *problem;
   cf_fit_options options;
   cf_lsq_summary summary;
   double *h; /* the normal matrix at a minimum (NaN: none) */
@@ -158,29 +161,22 @@ typedef struct start_job {
 
 static void run_job(void *user, int i) {
   start_job *job = &((start_job *)user)[i];
-  job->status = fit_solve(&job->problem, &job->options, START_ITERATIONS, &job->summary, &job->err);
+  job->status = fit_solve(job->problem, &job->options, START_ITERATIONS, &job->summary, &job->err);
   job->h[0] = NAN;
   if (job->status == CF_OK && !job->summary.stopped &&
-      fit_normal_equations(&job->problem, 1, job->h, NULL, NULL, &job->err) != CF_OK)
+      fit_normal_equations(job->problem, 1, job->h, NULL, NULL, &job->err) != CF_OK)
     job->h[0] = NAN; /* no test within the noise of this minimum */
 }
 
-/* Job j of a batch: a copy of the subsample's problem at its start, with
- * its own exposures and white balance (arrays the job owns). */
+/* Job j of a batch: its fork of the subsample's problem at its start, a
+ * trust region of its own. */
 static void prepare_job(start_job *job, const fit_problem *sub, const cf_fit_options *o,
                         const double *start, double log_scale, int width) {
-  double *exposures = job->problem.log_exposures, *balance = job->problem.log_balance;
-  double *light = job->problem.log_light;
-  job->problem = *sub;
-  job->problem.log_exposures = exposures;
-  job->problem.log_balance = balance;
-  job->problem.log_light = light;
-  memcpy(light, sub->log_light, sub->light_count * sizeof *light);
-  memcpy(exposures, sub->log_exposures, sub->images * sizeof *exposures);
-  memcpy(balance, sub->log_balance, 3 * sub->images * sizeof *balance);
-  memcpy(job->problem.params, start, sizeof job->problem.params);
-  job->problem.log_scale = log_scale;
-  job->problem.radius = 0.0; /* a start far from the last one's end */
+  fit_problem_copy_values(job->problem, sub);
+  fit_values *v = fit_problem_values(job->problem);
+  memcpy(v->params, start, sizeof v->params);
+  v->log_scale = log_scale;
+  fit_problem_forget_radius(job->problem); /* a start far from the last one's end */
   job->options = *o;
   if (width > 1) job->options.threads = 1;
 }
@@ -195,23 +191,22 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
                             double (*starts)[CF_MAX_DIM], int count, double log_scale,
                             cf_fit_result *r, double *log_scales, cf_error *err) {
   cf_status s = fit_declare(sub, plan, err);
-  sub->function_tolerance = START_TOLERANCE;
-  sub->min_relative_decrease = START_MIN_RELATIVE_DECREASE;
+  fit_solve_settings *settings = fit_problem_settings(sub);
+  settings->function_tolerance = START_TOLERANCE;
+  settings->min_relative_decrease = START_MIN_RELATIVE_DECREASE;
   int width = o->threads >= 2 ? (o->threads < count ? o->threads : count) : 1;
   if (width < 1) width = 1;
-  size_t n = (size_t)sub->num_unknowns;
+  size_t n = (size_t)fit_problem_unknown_count(sub);
   earlier_ends ends = {sub, NULL, NULL, NULL, NULL, 0};
+  settings->stop = reached_earlier_end;
+  settings->stop_user = &ends;
   start_job *jobs = s == CF_OK ? calloc((size_t)width, sizeof *jobs) : NULL;
   if (s == CF_OK && !jobs) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (int j = 0; s == CF_OK && j < width; ++j)
-    if (!(jobs[j].problem.log_exposures =
-              malloc((sub->images ? sub->images : 1) * sizeof(double))) ||
-        !(jobs[j].problem.log_balance =
-              malloc(3 * (sub->images ? sub->images : 1) * sizeof(double))) ||
-        !(jobs[j].problem.log_light =
-              malloc((sub->light_count ? sub->light_count : 1) * sizeof(double))) ||
-        !(jobs[j].h = malloc((n ? n * n : 1) * sizeof(double))))
+  for (int j = 0; s == CF_OK && j < width; ++j) {
+    s = fit_problem_fork(sub, &jobs[j].problem, err);
+    if (s == CF_OK && !(jobs[j].h = malloc((n ? n * n : 1) * sizeof(double))))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  }
   if (s == CF_OK) {
     ends.x = malloc((size_t)count * (n ? n : 1) * sizeof *ends.x);
     ends.h = malloc((size_t)count * (n ? n * n : 1) * sizeof *ends.h);
@@ -220,8 +215,6 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
     if (!ends.x || !ends.h || !ends.cost || !ends.sigma2)
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
-  sub->stop = reached_earlier_end;
-  sub->stop_user = &ends;
   r->starts = 0;
   r->best_start = 0;
   for (int i = 0; s == CF_OK && i < count; i += width) {
@@ -238,28 +231,28 @@ static cf_status run_starts(fit_problem *sub, const cf_fit_options *o, const fit
       }
       cf_fit_start *start = &r->start[r->starts++];
       memcpy(start->start, starts[i + j], sizeof starts[i + j]);
-      memcpy(start->end, job->problem.params, sizeof job->problem.params);
+      const fit_values *end = fit_problem_read_values(job->problem);
+      memcpy(start->end, end->params, sizeof end->params);
       start->cost = job->summary.final_cost;
       start->iterations = job->summary.iterations;
       start->stopped = job->summary.stopped;
-      log_scales[i + j] = job->problem.log_scale;
+      log_scales[i + j] = end->log_scale;
       if (start->cost < r->start[r->best_start].cost) r->best_start = i + j;
       if (!job->summary.stopped) {
         int e = ends.count++;
-        fit_problem_get_x(&job->problem, ends.x + (size_t)e * n);
+        fit_problem_get_x(job->problem, ends.x + (size_t)e * n);
         memcpy(ends.h + (size_t)e * n * n, job->h, n * n * sizeof *job->h);
         ends.cost[e] = job->summary.final_cost;
+        size_t count_sub = fit_problem_count(sub);
         ends.sigma2[e] =
-            sub->count ? 2.0 * job->summary.final_cost / (3.0 * (double)sub->count) : 0.0;
+            count_sub ? 2.0 * job->summary.final_cost / (3.0 * (double)count_sub) : 0.0;
       }
     }
   }
-  sub->stop = NULL;
-  sub->stop_user = NULL;
+  settings->stop = NULL;
+  settings->stop_user = NULL;
   for (int j = 0; jobs && j < width; ++j) {
-    free(jobs[j].problem.log_exposures);
-    free(jobs[j].problem.log_balance);
-    free(jobs[j].problem.log_light);
+    fit_problem_free(jobs[j].problem);
     free(jobs[j].h);
   }
   free(jobs);
@@ -280,24 +273,24 @@ static cf_status warm_dielectric(const cf_capture *capture, const cf_fit_options
   o2.model = CF_MODEL_DIELECTRIC;
   fit_plan plan;
   fit_plan_for(capture, &o2, &plan);
-  fit_problem sub;
+  fit_problem *sub;
   cf_status s =
-      fit_problem_init(&sub, capture, CF_MODEL_DIELECTRIC, sample->index, sample->count, 1, err);
+      fit_problem_new(&sub, capture, CF_MODEL_DIELECTRIC, sample->index, sample->count, 1, err);
   if (s != CF_OK) return s;
-  s = fit_problem_set_sample_weights(&sub, sample->weight, err);
+  s = fit_problem_set_sample_weights(sub, sample->weight, err);
   double base[CF_MAX_DIM], log_scale, starts[CF_FIT_MAX_STARTS][CF_MAX_DIM],
       log_scales[CF_FIT_MAX_STARTS];
-  fit_base_start(&sub, &plan, &o2, base, &log_scale);
-  int held[CF_MAX_DIM];
-  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan.status[k] != CF_PARAM_FITTED;
+  fit_base_start(sub, &plan, &o2, base, &log_scale);
+  int held[CF_MAX_DIM], dim = fit_problem_dim(sub);
+  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < dim && plan.status[k] != CF_PARAM_FITTED;
   int count = fit_starts(CF_MODEL_DIELECTRIC, base, held, NULL, starts, CF_FIT_MAX_STARTS);
   cf_fit_result *r = s == CF_OK ? calloc(1, sizeof *r) : NULL;
   if (s == CF_OK)
-    s = r ? run_starts(&sub, &o2, &plan, starts, count, log_scale, r, log_scales, err)
+    s = r ? run_starts(sub, &o2, &plan, starts, count, log_scale, r, log_scales, err)
           : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) memcpy(m2, r->start[r->best_start].end, sizeof r->start[0].end);
   free(r);
-  fit_problem_release(&sub);
+  fit_problem_free(sub);
   return s;
 }
 
@@ -308,14 +301,14 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
                          double *best_params, double *best_log_scale, double *sigma,
                          cf_error *err) {
   fit_sample sample;
-  fit_problem sub;
+  fit_problem *sub;
   cf_status s =
-      fit_problem_init_sample(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
+      fit_sample_problem(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
   if (s != CF_OK) return s;
   double base[CF_MAX_DIM], log_scale;
-  fit_base_start(&sub, plan, o, base, &log_scale);
-  int held[CF_MAX_DIM];
-  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < sub.dim && plan->status[k] != CF_PARAM_FITTED;
+  fit_base_start(sub, plan, o, base, &log_scale);
+  int held[CF_MAX_DIM], dim = fit_problem_dim(sub);
+  for (int k = 0; k < CF_MAX_DIM; ++k) held[k] = k < dim && plan->status[k] != CF_PARAM_FITTED;
   /* M3 and M4 start from the fitted M2 */
   double m2[CF_MAX_DIM];
   cf_model_id twin = cf_model_info_get(o->model)->ggx_twin;
@@ -329,7 +322,7 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
     memcpy(starts[0], base, sizeof base);
     count = 1;
   }
-  if (s == CF_OK) s = run_starts(&sub, o, plan, starts, count, log_scale, r, log_scales, err);
+  if (s == CF_OK) s = run_starts(sub, o, plan, starts, count, log_scale, r, log_scales, err);
   if (s == CF_OK) {
     memcpy(best_params, r->start[r->best_start].end, sizeof r->start[0].end);
     *best_log_scale = log_scales[r->best_start];
@@ -337,11 +330,12 @@ cf_status fit_multistart(const cf_capture *capture, const fit_population *popula
   /* σ from the residuals at the best start (when the capture has no noise
    * model): the subsample's are as good an estimate as all of them */
   if (s == CF_OK) {
-    memcpy(sub.params, best_params, sizeof sub.params);
-    sub.log_scale = *best_log_scale;
-    s = fit_estimate_sigma(&sub, sigma, err);
+    fit_values *v = fit_problem_values(sub);
+    memcpy(v->params, best_params, sizeof v->params);
+    v->log_scale = *best_log_scale;
+    s = fit_estimate_sigma(sub, sigma, err);
   }
-  fit_problem_release(&sub);
+  fit_problem_free(sub);
   fit_sample_free(&sample);
   return s;
 }
@@ -350,14 +344,15 @@ cf_status fit_start_sigma(const cf_capture *capture, const fit_population *popul
                           const cf_fit_options *o, const double *params, double log_scale,
                           double *sigma, cf_error *err) {
   fit_sample sample;
-  fit_problem sub;
+  fit_problem *sub;
   cf_status s =
-      fit_problem_init_sample(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
+      fit_sample_problem(&sub, &sample, capture, o->model, population, SUBSAMPLE_TARGET, err);
   if (s != CF_OK) return s;
-  memcpy(sub.params, params, sizeof sub.params);
-  sub.log_scale = log_scale;
-  s = fit_estimate_sigma(&sub, sigma, err);
-  fit_problem_release(&sub);
+  fit_values *v = fit_problem_values(sub);
+  memcpy(v->params, params, sizeof v->params);
+  v->log_scale = log_scale;
+  s = fit_estimate_sigma(sub, sigma, err);
+  fit_problem_free(sub);
   fit_sample_free(&sample);
   return s;
 }

@@ -8,6 +8,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "fit_plan.h"
+#include "fit_sample.h"
 
 /* Runs the starts on a subsample of the population (recorded in r->start;
  * the best is r->best_start) and returns the best start's values, its log

@@ -8,6 +8,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "fit_problem.h"
+#include "fit_sample.h"
 
 /* RMSE, relative RMSE, censored and rejected counts, per image, at the
  * current values, into r (which then owns its per-image arrays). A pixel

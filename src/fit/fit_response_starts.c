@@ -15,6 +15,7 @@
 #include "clayfit/image.h"
 #include "clayfit/response_model.h"
 #include "fit_residuals.h"
+#include "fit_sample.h"
 
 enum {
   K = CF_RESPONSE_MODEL_KNOTS,
@@ -25,10 +26,11 @@ enum {
 /* The mean log of the subsample's positive measurements: the level at
  * which a start's curve meets the identity (through the scale). */
 static double mean_log_level(const fit_problem *p) {
+  const double *y = fit_problem_measured(p);
   double sum = 0.0;
   size_t n = 0;
-  for (size_t i = 0; i < 3 * p->count; ++i)
-    if (p->y[i] > 0.0) sum += log(p->y[i]), ++n;
+  for (size_t i = 0; i < 3 * fit_problem_count(p); ++i)
+    if (y[i] > 0.0) sum += log(y[i]), ++n;
   return n ? sum / (double)n : log(0.25);
 }
 
@@ -76,12 +78,10 @@ static int start_shapes(const cf_capture_summary *about, const double *given, do
  * channels, the prior) plus Σ w log σ. The cost alone does not compare
  * curves, whose slopes scale σ: on linear JPEGs declared sRGB it ranked
  * a curve flat at the top (cost 6470) above the right one (26359). */
-static cf_status neg_log_likelihood(fit_problem *p, const cf_capture *capture, int threads,
-                                    double *nll, cf_error *err) {
-  size_t n = (size_t)p->num_unknowns;
+static cf_status neg_log_likelihood(fit_problem *p, int threads, double *nll, cf_error *err) {
+  size_t n = (size_t)fit_problem_unknown_count(p);
   double *jtj = malloc((n * n + n + 1) * sizeof *jtj), cost = 0.0, logs = 0.0;
-  cf_status s =
-      jtj ? fit_problem_reweight(p, capture, err) : cf_error_set(err, CF_ENOMEM, "out of memory");
+  cf_status s = jtj ? fit_problem_reweight(p, err) : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) s = fit_normal_equations(p, threads, jtj, jtj + n * n, &cost, err);
   if (s == CF_OK) s = fit_sum_log_sigma(p, &logs, err);
   free(jtj);
@@ -93,32 +93,29 @@ static cf_status neg_log_likelihood(fit_problem *p, const cf_capture *capture, i
 typedef struct start_run {
   const cf_capture *capture;
   const cf_fit_options *o;
-  fit_problem sub;
+  fit_problem *sub;
   double sigma, level; /* the one σ; mean_log_level */
   double best, best_params[CF_MAX_DIM], best_log_scale, best_response[K];
 } start_run;
 
 /* A reweighted solve of the subsample with the plan's unknowns. */
 static cf_status solve_start(start_run *run, const fit_plan *plan, cf_error *err) {
-  fit_problem *sub = &run->sub;
-  cf_status s = fit_declare(sub, plan, err);
+  cf_status s = fit_declare_robust(run->sub, plan, run->o, run->sigma, err);
   if (s != CF_OK) return s;
-  if (!fit_capture_has_noise(run->capture)) fit_problem_set_sigma(sub, run->capture, run->sigma);
-  sub->loss = run->o->loss;
-  sub->loss_scale = run->o->loss_scale;
   cf_lsq_summary summary;
-  return fit_solve_reweighted(sub, run->capture, run->o, START_ROUNDS, &summary, NULL, err);
+  return fit_solve_reweighted(run->sub, run->o, START_ROUNDS, &summary, NULL, err);
 }
 
 /* The subsample's values kept when they are the most likely yet. */
 static cf_status consider(start_run *run, cf_error *err) {
   double nll;
-  cf_status s = neg_log_likelihood(&run->sub, run->capture, fit_threads(run->o), &nll, err);
+  cf_status s = neg_log_likelihood(run->sub, fit_threads(run->o), &nll, err);
   if (s != CF_OK || !(nll < run->best)) return s;
+  const fit_values *v = fit_problem_read_values(run->sub);
   run->best = nll;
-  memcpy(run->best_params, run->sub.params, sizeof run->best_params);
-  run->best_log_scale = run->sub.log_scale;
-  memcpy(run->best_response, run->sub.response, sizeof run->best_response);
+  memcpy(run->best_params, v->params, sizeof run->best_params);
+  run->best_log_scale = v->log_scale;
+  memcpy(run->best_response, v->response, sizeof run->best_response);
   return CF_OK;
 }
 
@@ -139,10 +136,10 @@ static double meet_shift(double level, const double *slopes) {
 
 static cf_status one_start(start_run *run, const fit_plan *plan, const double *slopes,
                            const double *params, double log_scale, cf_error *err) {
-  fit_problem *sub = &run->sub;
-  memcpy(sub->params, params, sizeof sub->params);
-  memcpy(sub->response, slopes, sizeof sub->response);
-  sub->log_scale = log_scale + (plan->scale ? meet_shift(run->level, slopes) : 0.0);
+  fit_values *v = fit_problem_values(run->sub);
+  memcpy(v->params, params, sizeof v->params);
+  memcpy(v->response, slopes, sizeof v->response);
+  v->log_scale = log_scale + (plan->scale ? meet_shift(run->level, slopes) : 0.0);
   fit_plan held = *plan;
   held.response = 0;
   cf_status s = solve_start(run, &held, err);
@@ -161,11 +158,11 @@ cf_status fit_response_starts(const cf_capture *capture, const fit_population *p
   start_run run = {.capture = capture, .o = o, .sigma = sigma, .best = HUGE_VAL};
   fit_sample sample;
   cf_status s =
-      fit_problem_init_sample(&run.sub, &sample, capture, o->model, population, START_TARGET, err);
+      fit_sample_problem(&run.sub, &sample, capture, o->model, population, START_TARGET, err);
   if (s != CF_OK) return s;
   fit_plan free_curve = *plan;
   free_curve.response = 1;
-  run.level = mean_log_level(&run.sub);
+  run.level = mean_log_level(run.sub);
   /* a given start's curve (the model choice's candidate's) is one of the
    * shapes; the refined values are the identity's either way */
   const double *given = o->use_start ? response : NULL;
@@ -178,7 +175,7 @@ cf_status fit_response_starts(const cf_capture *capture, const fit_population *p
     *log_scale = run.best_log_scale;
     memcpy(response, run.best_response, sizeof run.best_response);
   }
-  fit_problem_release(&run.sub);
+  fit_problem_free(run.sub);
   fit_sample_free(&sample);
   return s;
 }

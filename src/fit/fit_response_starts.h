@@ -8,6 +8,7 @@
 #include "clayfit/capture.h"
 #include "clayfit/fit.h"
 #include "fit_plan.h"
+#include "fit_sample.h"
 #include "fit_problem.h"
 
 /* With an unknown tone curve (unless o->no_response_starts): from the

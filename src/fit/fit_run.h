@@ -5,7 +5,8 @@
 #define CLAYFIT_FIT_RUN_H
 
 #include "clayfit/fit.h"
-#include "fit_problem.h"
+#include "fit_outcome.h"
+#include "fit_sample.h"
 
 /* `tolerance`: the relative change of the cost at which the solves on the
  * population stop (0: the solver's 1e-10; the model choice's candidates
@@ -14,8 +15,9 @@ cf_status fit_run_population(const cf_capture *capture, const fit_population *po
                              const cf_fit_options *o, double tolerance, cf_fit_result *r,
                              cf_error *err);
 
-/* Append a warning to the result (dropped beyond CF_FIT_MAX_WARNINGS). */
-void fit_add_warning(cf_fit_result *r, const char *format, ...)
-    __attribute__((format(printf, 2, 3)));
+/* cf_fit_run on a budget drawn before (fit_budget_for, with the same
+ * sampling options: fit_budget_same), the gains checked before. */
+cf_status fit_run_budget(const cf_capture *capture, const fit_budget *budget,
+                         const cf_fit_options *o, cf_fit_result *r, cf_error *err);
 
 #endif /* CLAYFIT_FIT_RUN_H */

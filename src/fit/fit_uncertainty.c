@@ -7,31 +7,39 @@
 
 #include "fit_plan.h"
 #include "lsq/linalg.h"
-#include "lsq/lsq.h"
 
 /* A model slot's standard deviation from its unknown's variance:
  * dρ = ρ d log ρ; dσ = dσ² / (2σ), and at σ = 0, where σ = √σ² is not
  * differentiable, the half-width √sd(σ²) (σ² <= sd(σ²) within one sd). */
-double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance) {
-  double sd = sqrt(fmax(0.0, variance)), x = p->params[unk->slot];
-  if (unk->kind == FIT_LOG_SLOT) return x * sd;
-  if (unk->kind == FIT_SQUARE_SLOT) return x > 0.5 * sqrt(sd) ? sd / (2.0 * x) : sqrt(sd);
+double fit_slot_sd(const fit_problem *p, int slot, double variance) {
+  double sd = sqrt(fmax(0.0, variance)), x = fit_problem_read_values(p)->params[slot];
+  fit_slot_form form = fit_slot_form_of(fit_problem_model(p), slot);
+  if (form == FIT_SLOT_LOG) return x * sd;
+  if (form == FIT_SLOT_SQUARE) return x > 0.5 * sqrt(sd) ? sd / (2.0 * x) : sqrt(sd);
   return sd;
+}
+
+/* Unknown u: one of the model's slots, not at a bound? */
+static int free_material(const fit_problem *p, int u) {
+  return fit_problem_unknown(p, u).kind == &fit_kind_material && !fit_problem_read_at_bound(p)[u];
 }
 
 /* The model slots' block of JᵀJ, each column scaled to its range's width
  * (∂/∂ρ = ∂/∂log ρ / ρ). */
 static int scaled_model_block(const fit_problem *p, const double *jtj, int *slots, double *h) {
-  int n = p->num_unknowns, m = 0;
+  int n = fit_problem_unknown_count(p), m = 0;
   int map[CF_MAX_DIM];
   double width[CF_MAX_DIM];
+  const double *params = fit_problem_read_values(p)->params;
+  cf_model_id model = fit_problem_model(p);
   for (int u = 0; u < n && m < CF_MAX_DIM; ++u) {
-    const fit_unknown *unk = &p->unknowns[u];
-    if (!fit_unknown_is_model(unk->kind) || p->at_bound[u]) continue;
+    if (!free_material(p, u)) continue;
+    int slot = fit_problem_unknown(p, u).slot;
     map[m] = u;
-    slots[m] = unk->slot;
-    width[m] = unk->kind == FIT_LOG_SLOT ? fit_slot_width(p, unk->slot) / p->params[unk->slot]
-                                         : p->upper[u] - p->lower[u];
+    slots[m] = slot;
+    width[m] = fit_slot_form_of(model, slot) == FIT_SLOT_LOG
+                   ? fit_slot_width(model, slot) / params[slot]
+                   : fit_problem_upper(p, u) - fit_problem_lower(p, u);
     ++m;
   }
   for (int a = 0; a < m; ++a)
@@ -49,7 +57,8 @@ static int scaled_model_block(const fit_problem *p, const double *jtj, int *slot
  * the fit held the diffuse roughness as "not constrained"). */
 cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
                               int *rank_deficient, cf_error *err) {
-  int n = p->num_unknowns, m = 0;
+  int n = fit_problem_unknown_count(p), m = 0;
+  const int *at_bound = fit_problem_read_at_bound(p);
   int *map = malloc((size_t)n * sizeof *map);
   double *sub = malloc((size_t)n * (size_t)n * sizeof *sub);
   double *sub_covariance = malloc((size_t)n * (size_t)n * sizeof *sub_covariance);
@@ -57,7 +66,7 @@ cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *c
   cf_status s =
       map && sub && sub_covariance && unit ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
   for (int u = 0; s == CF_OK && u < n; ++u)
-    if (!p->at_bound[u]) map[m++] = u;
+    if (!at_bound[u]) map[m++] = u;
   for (int a = 0; s == CF_OK && a < m; ++a) { /* (a column of 0 stays, and is singular) */
     double d = jtj[map[a] * n + map[a]];
     unit[a] = d > 0.0 && isfinite(d) ? 1.0 / sqrt(d) : 1.0;
@@ -80,22 +89,15 @@ cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *c
 }
 
 cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance, cf_error *err) {
-  if (!p->sample_root) return CF_OK;
-  size_t n = (size_t)p->num_unknowns;
-  double *roots = malloc((p->count ? p->count : 1) * sizeof *roots);
-  double *b = malloc(n * n * sizeof *b);
-  cf_status s = roots && b ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
-  if (s == CF_OK) { /* B: each row weighed by w instead of √w */
-    memcpy(roots, p->sample_root, p->count * sizeof *roots);
-    for (size_t i = 0; i < p->count; ++i) p->sample_root[i] = roots[i] * roots[i];
-    s = fit_normal_equations(p, threads, b, NULL, NULL, err);
-    memcpy(p->sample_root, roots, p->count * sizeof *roots);
-  }
+  if (!fit_problem_sample_roots(p)) return CF_OK;
+  size_t n = (size_t)fit_problem_unknown_count(p);
+  double *b = malloc((n ? n * n : 1) * sizeof *b);
+  cf_status s = b ? fit_sample_information(p, threads, b, err) /* B = Σ w² JᵀJ */
+                  : cf_error_set(err, CF_ENOMEM, "out of memory");
   /* A⁻¹ B A⁻¹ (A⁻¹ is 0 on the rows and columns at a bound) */
   if (s == CF_OK && !cf_sandwich((int)n, covariance, b))
     s = cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK) memcpy(covariance, b, n * n * sizeof *b);
-  free(roots);
   free(b);
   return s;
 }
@@ -107,13 +109,14 @@ cf_status fit_sample_covariance(fit_problem *p, int threads, double *covariance,
  * started at its floor in a channel no light has), and it is not
  * "fitted". */
 static int mark_unmoved(const fit_problem *p, const double *jtj, fit_plan *plan) {
-  int found = 0;
-  for (int u = 0; u < p->num_unknowns; ++u)
-    if (fit_unknown_is_model(p->unknowns[u].kind) &&
-        !(jtj[(size_t)u * (size_t)p->num_unknowns + (size_t)u] > 0.0)) {
-      plan->status[p->unknowns[u].slot] = CF_PARAM_UNCONSTRAINED;
+  int found = 0, n = fit_problem_unknown_count(p);
+  for (int u = 0; u < n; ++u) {
+    fit_unknown unk = fit_problem_unknown(p, u);
+    if (unk.kind == &fit_kind_material && !(jtj[(size_t)u * (size_t)n + (size_t)u] > 0.0)) {
+      plan->status[unk.slot] = CF_PARAM_UNCONSTRAINED;
       found = 1;
     }
+  }
   return found;
 }
 
@@ -125,13 +128,14 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
                                  int rank_deficient, fit_plan *plan, int *found, cf_error *err) {
   *found = mark_unmoved(p, jtj, plan);
   if (*found) return CF_OK;
+  int n = fit_problem_unknown_count(p);
   if (covariance && !rank_deficient) {
-    for (int u = 0; u < p->num_unknowns; ++u) {
-      const fit_unknown *unk = &p->unknowns[u];
-      if (!fit_unknown_is_model(unk->kind) || p->at_bound[u]) continue;
-      double sd = fit_slot_sd(p, unk, covariance[u * p->num_unknowns + u]);
-      if (sd > 0.5 * fit_slot_width(p, unk->slot)) {
-        plan->status[p->unknowns[u].slot] = CF_PARAM_UNCONSTRAINED;
+    for (int u = 0; u < n; ++u) {
+      if (!free_material(p, u)) continue;
+      int slot = fit_problem_unknown(p, u).slot;
+      double sd = fit_slot_sd(p, slot, covariance[u * n + u]);
+      if (sd > 0.5 * fit_slot_width(fit_problem_model(p), slot)) {
+        plan->status[slot] = CF_PARAM_UNCONSTRAINED;
         *found = 1;
       }
     }
@@ -155,10 +159,8 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
         *found = 1;
       }
   }
-  int gains = 0;
-  for (int u = 0; u < p->num_unknowns; ++u)
-    gains |= p->unknowns[u].kind == FIT_LOG_EXPOSURE || p->unknowns[u].kind == FIT_LOG_BALANCE ||
-             p->unknowns[u].kind == FIT_LOG_LIGHT;
+  int gains = fit_problem_has_kind(p, &fit_kind_exposure) ||
+              fit_problem_has_kind(p, &fit_kind_balance) || fit_problem_has_kind(p, &fit_kind_light);
   if (!*found && gains && values[weakest] > 1e-10 * largest)
     /* the material is constrained: the deficiency is the gains' (holding
      * a model slot would not mend it; cf_fit_check_gains names the images
@@ -191,20 +193,22 @@ static int by_tile(const void *a, const void *b) {
 
 /* Observation i's tile: its image and the tile_px × tile_px square of
  * pixels (from the image's corner, as a codec's blocks) it lies in. */
-static uint64_t tile_key(const fit_problem *p, size_t i, int tile_px) {
-  size_t o = p->index ? p->index[i] : i;
-  uint64_t x = (uint64_t)fmax(0.0, p->obs->pixel[2 * o] / tile_px);
-  uint64_t y = (uint64_t)fmax(0.0, p->obs->pixel[2 * o + 1] / tile_px);
-  return (uint64_t)p->image[i] << 40 | (y & 0xfffffu) << 20 | (x & 0xfffffu);
+static uint64_t tile_key(const fit_problem *p, const cf_observations *obs, size_t i,
+                         int tile_px) {
+  size_t o = fit_problem_observation(p, i);
+  uint64_t x = (uint64_t)fmax(0.0, obs->pixel[2 * o] / tile_px);
+  uint64_t y = (uint64_t)fmax(0.0, obs->pixel[2 * o + 1] / tile_px);
+  return (uint64_t)fit_problem_image(p, i) << 40 | (y & 0xfffffu) << 20 | (x & 0xfffffu);
 }
 
 /* Each used observation's tile as a number 0 .. *tiles − 1. */
 static cf_status number_tiles(const fit_problem *p, int tile_px, size_t *tile, size_t *tiles,
                               cf_error *err) {
-  size_t n = p->count;
+  size_t n = fit_problem_count(p);
+  const cf_observations *obs = cf_capture_observations(fit_problem_capture(p));
   tile_row *rows = malloc((n ? n : 1) * sizeof *rows);
   if (!rows) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t i = 0; i < n; ++i) rows[i] = (tile_row){tile_key(p, i, tile_px), i};
+  for (size_t i = 0; i < n; ++i) rows[i] = (tile_row){tile_key(p, obs, i, tile_px), i};
   qsort(rows, n, sizeof *rows, by_tile);
   *tiles = 0;
   for (size_t a = 0; a < n; ++a) {
@@ -221,11 +225,12 @@ static cf_status number_tiles(const fit_problem *p, int tile_px, size_t *tile, s
  * unknowns at a bound (held there). */
 static cf_status tile_scores(const fit_problem *p, const size_t *tile, double *g, size_t tiles,
                              cf_error *err) {
-  const size_t m = (size_t)p->num_unknowns;
+  const size_t m = (size_t)fit_problem_unknown_count(p);
+  const int *at_bound = fit_problem_read_at_bound(p);
   cf_status s = fit_problem_group_scores(p, tile, g, err);
   for (size_t t = 0; s == CF_OK && t < tiles; ++t)
     for (size_t u = 0; u < m; ++u)
-      if (p->at_bound[u]) g[t * m + u] = 0.0;
+      if (at_bound[u]) g[t * m + u] = 0.0;
   return s;
 }
 
@@ -247,7 +252,7 @@ static cf_status tile_sandwich(int m, const double *g, size_t tiles, double *cov
 
 cf_status fit_tile_covariance(const fit_problem *p, int tile_px, double *covariance, int *applied,
                               cf_error *err) {
-  const size_t n = p->count, m = (size_t)p->num_unknowns;
+  const size_t n = fit_problem_count(p), m = (size_t)fit_problem_unknown_count(p);
   *applied = 0;
   if (n == 0 || m == 0) return CF_OK;
   size_t *tile = malloc(n * sizeof *tile), tiles = 0;

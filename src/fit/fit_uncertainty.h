@@ -11,14 +11,14 @@
 /* A model slot's standard deviation from its unknown's variance:
  * dρ = ρ d log ρ; dσ = dσ² / (2σ), and near σ = 0, where σ = √σ² is not
  * differentiable, the half-width √sd(σ²). */
-double fit_slot_sd(const fit_problem *p, const fit_unknown *unk, double variance);
+double fit_slot_sd(const fit_problem *p, int slot, double variance);
 
 /* The covariance of the unknowns not at a bound (those at one: rows and
  * columns 0); *rank_deficient when JᵀJ is singular there. */
 cf_status fit_free_covariance(const fit_problem *p, const double *jtj, double *covariance,
                               int *rank_deficient, cf_error *err);
 
-/* A pixel budget's covariance (p->sample_root set; nothing to do
+/* A pixel budget's covariance (sample weights set; nothing to do
  * otherwise). The weighted fit's normal matrix A = Σ w JᵀJ, w the
  * inverse of an observation's chance of being drawn, estimates the
  * information of every observation, which the sample does not hold; the

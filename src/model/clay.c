@@ -108,75 +108,102 @@ typedef struct clay_given {
   cf_std_dv lobe[2];
 } clay_given;
 
-CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
-                                double *grad, int dim, int tailed, cf_clay_terms *terms,
-                                const clay_given *given) {
+/* The quantities of clay_eval's value (steps 2-8) that its derivatives
+ * reuse, one named step after another: the film's top specular, the film
+ * (the refracted pair, the transmissions into it, the absorption's path),
+ * the base in the film, and the per-channel combination. */
+typedef struct clay_forward {
+  cf_fresnel fresnel_1, f1_i, f1_o, fresnel_2, f2_i, f2_o;
+  cf_std_dv s1, s2;
+  refracted_cos ri, ro, larger; /* larger: max(c_i', c_o') */
+  cf_half_vector hb;
+  double top, t1_i, t1_o, transmission, g_b, path;
+  double base_specular, t2_i, t2_o, transmission_b, x, on;
+  double phi_unit, diffuse_unit, absorption[3], phi[3], base[3];
+} clay_forward;
+
+/* step 8, first term: the film's top specular, in air */
+CF_ALWAYS_INLINE void clay_top(const cf_clay_prep *p, const cf_geometry *g, int with_grad,
+                               int tailed, const clay_given *given, clay_forward *w) {
+  w->fresnel_1 = fresnel_dielectric(&p->eta_1, g->c_d, fresnel_root(&p->eta_1, g->c_d));
+  w->s1 = given ? given->lobe[0]
+                : cf_lobe_dv(tailed ? &p->tail[0] : NULL, &p->table, p->a2_1, p->inv_a2_1,
+                             g->sin2_h, g->cos2_h, g->cos_i, g->cos_o, with_grad);
+  w->top = w->fresnel_1.value * w->s1.value;
+}
+
+/* steps 2-5: the refracted pair's invariants, T(c_i) T(c_o) (T(c) = 1 −
+ * F(F0_1, c), g the refraction's root) and the path factor 1/c_i' + 1/c_o'
+ * of the absorption */
+CF_ALWAYS_INLINE void clay_film(const cf_clay_prep *p, const cf_geometry *g,
+                                const clay_given *given, clay_forward *w) {
   const double c_i = g->cos_i, c_o = g->cos_o;
-
-  /* step 8, first term: the film's top specular, in air */
-  cf_fresnel fresnel_1 = fresnel_dielectric(&p->eta_1, g->c_d, fresnel_root(&p->eta_1, g->c_d));
-  cf_std_dv s1 = given ? given->lobe[0]
-                       : cf_lobe_dv(tailed ? &p->tail[0] : NULL, &p->table, p->a2_1, p->inv_a2_1,
-                                    g->sin2_h, g->cos2_h, c_i, c_o, grad != NULL);
-  double top = fresnel_1.value * s1.value;
-
-  /* steps 2-3: the refracted pair's invariants */
-  refracted_cos ri = given ? given->r.ri : refract_cos(p, c_i);
-  refracted_cos ro = given ? given->r.ro : refract_cos(p, c_o);
-
-  /* step 4: T(c_i) T(c_o), T(c) = 1 − F(F0_1, c), g the refraction's root */
-  cf_fresnel f1_i = fresnel_dielectric(&p->eta_1, c_i, ri.root);
-  cf_fresnel f1_o = fresnel_dielectric(&p->eta_1, c_o, ro.root);
-  double t1_i = f1_i.transmission, t1_o = f1_o.transmission;
-  double transmission = t1_i * t1_o;
+  w->ri = given ? given->r.ri : refract_cos(p, c_i);
+  w->ro = given ? given->r.ro : refract_cos(p, c_o);
+  w->f1_i = fresnel_dielectric(&p->eta_1, c_i, w->ri.root);
+  w->f1_o = fresnel_dielectric(&p->eta_1, c_o, w->ro.root);
+  w->t1_i = w->f1_i.transmission, w->t1_o = w->f1_o.transmission;
+  w->transmission = w->t1_i * w->t1_o;
   double t_sq_b = g->t_sq * p->inv_eta2;
-  double g_b = g->g * p->inv_eta2;
-  cf_half_vector hb = given ? given->r.hb : half_vector(t_sq_b, ri.c + ro.c);
+  w->g_b = g->g * p->inv_eta2;
+  w->hb = given ? given->r.hb : half_vector(t_sq_b, w->ri.c + w->ro.c);
+  w->path = w->ri.inv_c + w->ro.inv_c;
+}
 
-  /* step 5: path factor 1/c_i' + 1/c_o' of the absorption */
-  double path = ri.inv_c + ro.inv_c;
-
-  /* step 7: the base's specular and diffuse lobes, in the film */
+/* step 7: the base's specular and diffuse lobes, in the film */
+CF_ALWAYS_INLINE void clay_base(const cf_clay_prep *p, int with_grad, int tailed,
+                                const clay_given *given, clay_forward *w) {
   const cf_fresnel_eta *e2 = &p->eta_2;
-  cf_fresnel fresnel_2 = fresnel_dielectric(e2, hb.c_d, fresnel_root(e2, hb.c_d));
-  cf_std_dv s2 = given ? given->lobe[1]
-                       : cf_lobe_dv(tailed ? &p->tail[1] : NULL, &p->table, p->a2_2, p->inv_a2_2,
-                                    hb.sin2_h, hb.cos2_h, ri.c, ro.c, grad != NULL);
-  double base_specular = fresnel_2.value * s2.value;
-  cf_fresnel f2_i = fresnel_dielectric(e2, ri.c, fresnel_root(e2, ri.c));
-  cf_fresnel f2_o = fresnel_dielectric(e2, ro.c, fresnel_root(e2, ro.c));
-  double t2_i = f2_i.transmission, t2_o = f2_o.transmission;
-  double transmission_b = t2_i * t2_o;
-  const refracted_cos *larger = ri.c > ro.c ? &ri : &ro; /* max(c_i', c_o') */
-  double x = g_b > 0.0 ? g_b * larger->inv_c : 0.0;      /* ON's angular factor */
-  double on = (p->on.a + p->on.b * x) * CF_INV_PI;       /* ON / ρ */
+  const refracted_cos *ri = &w->ri, *ro = &w->ro;
+  w->fresnel_2 = fresnel_dielectric(e2, w->hb.c_d, fresnel_root(e2, w->hb.c_d));
+  w->s2 = given ? given->lobe[1]
+                : cf_lobe_dv(tailed ? &p->tail[1] : NULL, &p->table, p->a2_2, p->inv_a2_2,
+                             w->hb.sin2_h, w->hb.cos2_h, ri->c, ro->c, with_grad);
+  w->base_specular = w->fresnel_2.value * w->s2.value;
+  w->f2_i = fresnel_dielectric(e2, ri->c, fresnel_root(e2, ri->c));
+  w->f2_o = fresnel_dielectric(e2, ro->c, fresnel_root(e2, ro->c));
+  w->t2_i = w->f2_i.transmission, w->t2_o = w->f2_o.transmission;
+  w->transmission_b = w->t2_i * w->t2_o;
+  w->larger = ri->c > ro->c ? *ri : *ro;
+  w->x = w->g_b > 0.0 ? w->g_b * w->larger.inv_c : 0.0; /* ON's angular factor */
+  w->on = (p->on.a + p->on.b * w->x) * CF_INV_PI;       /* ON / ρ */
+}
 
-  /* step 8: combine per channel; phi = T T a / η1² */
-  double absorption[3], phi[3], base[3];
-  double phi_unit = transmission * p->inv_eta2, diffuse_unit = transmission_b * on;
+/* step 8: combine per channel; phi = T T a / η1² */
+CF_ALWAYS_INLINE void clay_combine(const cf_clay_prep *p, clay_forward *w, double f[3]) {
+  w->phi_unit = w->transmission * p->inv_eta2, w->diffuse_unit = w->transmission_b * w->on;
   for (int c = 0; c < 3; ++c) {
-    absorption[c] = exp(-p->tau[c] * path);
-    phi[c] = phi_unit * absorption[c];
-    base[c] = base_specular + p->k[c] * p->rho[c] * diffuse_unit;
-    f[c] = top + phi[c] * base[c];
+    w->absorption[c] = exp(-p->tau[c] * w->path);
+    w->phi[c] = w->phi_unit * w->absorption[c];
+    w->base[c] = w->base_specular + p->k[c] * p->rho[c] * w->diffuse_unit;
+    f[c] = w->top + w->phi[c] * w->base[c];
   }
-  if (terms) {
-    terms->top = top;
-    terms->transmission = transmission;
-    terms->inv_eta2 = p->inv_eta2;
-    for (int c = 0; c < 3; ++c) {
-      terms->absorption[c] = absorption[c];
-      terms->recycling[c] = p->k[c];
-      terms->base[c] = base[c];
-    }
-  }
-  if (!grad) return;
+}
 
-  /* ---- derivatives ---- */
+CF_ALWAYS_INLINE void clay_store_terms(const cf_clay_prep *p, const clay_forward *w,
+                                       cf_clay_terms *terms) {
+  terms->top = w->top;
+  terms->transmission = w->transmission;
+  terms->inv_eta2 = p->inv_eta2;
+  for (int c = 0; c < 3; ++c) {
+    terms->absorption[c] = w->absorption[c];
+    terms->recycling[c] = p->k[c];
+    terms->base[c] = w->base[c];
+  }
+}
+
+/* The gradient's rows from the value's quantities: the top lobe, the
+ * refracted invariants' ∂/∂F0_1, the base's specular and diffuse lobes,
+ * chained per channel. */
+CF_ALWAYS_INLINE void clay_gradient(const cf_clay_prep *p, const cf_geometry *g,
+                                    const clay_forward *w, double *grad, int dim, int tailed) {
+  const refracted_cos ri = w->ri, ro = w->ro, larger = w->larger;
+  const cf_half_vector hb = w->hb;
+  const cf_std_dv s1 = w->s1, s2 = w->s2;
   /* top lobe */
-  double dtop_dr1 = fresnel_1.value * s1.d_a2 * p->da2_1;
-  double dtop_df0_1 = fresnel_1.d_f0 * s1.value;
-  double dtransmission = -(f1_i.d_f0 * t1_o + t1_i * f1_o.d_f0);
+  double dtop_dr1 = w->fresnel_1.value * s1.d_a2 * p->da2_1;
+  double dtop_df0_1 = w->fresnel_1.d_f0 * s1.value;
+  double dtransmission = -(w->f1_i.d_f0 * w->t1_o + w->t1_i * w->f1_o.d_f0);
 
   /* ∂/∂F0_1 of the refracted invariants */
   double d_path = -ri.d_c * ri.inv_c * ri.inv_c - ro.d_c * ro.inv_c * ro.inv_c;
@@ -189,45 +216,58 @@ CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, dou
   double d_c_d_b = 0.5 * d_s_sq_b * hb.c_d * hb.inv_s_sq;
 
   /* base specular: through F(c_d'), D(sin²θ_h') and V(c_i', c_o') */
+  const cf_fresnel fresnel_2 = w->fresnel_2;
   double dbase_spec_df0_1 = fresnel_2.d_c * d_c_d_b * s2.value +
                             fresnel_2.value * s2.d_sin2 * d_sin2_b +
                             fresnel_2.value * (s2.d_ci * ri.d_c + s2.d_co * ro.d_c);
   double dbase_spec_dr2 = fresnel_2.value * s2.d_a2 * p->da2_2;
   double dbase_spec_df0_2 = fresnel_2.d_f0 * s2.value;
   /* the one tail of both lobes (M4T) */
-  double dtop_dtail = fresnel_1.value * s1.d_gamma;
+  double dtop_dtail = w->fresnel_1.value * s1.d_gamma;
   double dbase_spec_dtail = fresnel_2.value * s2.d_gamma;
 
   /* base diffuse: transmissions into the clay, and the angular factor */
-  double dtransmission_b_df0_1 = -(f2_i.d_c * ri.d_c * t2_o + t2_i * f2_o.d_c * ro.d_c);
-  double dtransmission_b_df0_2 = -(f2_i.d_f0 * t2_o + t2_i * f2_o.d_f0);
+  double dtransmission_b_df0_1 = -(w->f2_i.d_c * ri.d_c * w->t2_o + w->t2_i * w->f2_o.d_c * ro.d_c);
+  double dtransmission_b_df0_2 = -(w->f2_i.d_f0 * w->t2_o + w->t2_i * w->f2_o.d_f0);
   double dx_df0_1 = 0.0;
-  if (g_b > 0.0) dx_df0_1 = (d_g_b - g_b * larger->d_c * larger->inv_c) * larger->inv_c;
+  if (w->g_b > 0.0) dx_df0_1 = (d_g_b - w->g_b * larger.d_c * larger.inv_c) * larger.inv_c;
   double don_df0_1 = p->on.b * dx_df0_1 * CF_INV_PI;
-  double don_dsigma = (p->on.d_a + p->on.d_b * x) * CF_INV_PI;
+  double don_dsigma = (p->on.d_a + p->on.d_b * w->x) * CF_INV_PI;
 
   /* channel-independent factors of the rows below (diffuse_unit = ∂base/∂(Kρ),
    * phi_unit = phi/a) */
-  double ddiffuse_unit_df0_1 = dtransmission_b_df0_1 * on + transmission_b * don_df0_1;
-  double dphi_unit_df0_1 = dtransmission * p->inv_eta2 + transmission * p->d_inv_eta2;
+  double ddiffuse_unit_df0_1 = dtransmission_b_df0_1 * w->on + w->transmission_b * don_df0_1;
+  double dphi_unit_df0_1 = dtransmission * p->inv_eta2 + w->transmission * p->d_inv_eta2;
   for (int c = 0; c < 3; ++c) {
     double *row = grad + c * dim;
-    double k = p->k[c], k_rho = k * p->rho[c];
-    double diffuse_b = diffuse_unit * p->rho[c]; /* K-free base diffuse */
-    double dphi_df0_1 = absorption[c] * (dphi_unit_df0_1 - phi_unit * p->tau[c] * d_path);
+    double k = p->k[c], k_rho = k * p->rho[c], phi = w->phi[c], base = w->base[c];
+    double diffuse_b = w->diffuse_unit * p->rho[c]; /* K-free base diffuse */
+    double dphi_df0_1 = w->absorption[c] * (dphi_unit_df0_1 - w->phi_unit * p->tau[c] * d_path);
     double dbase_df0_1 =
         dbase_spec_df0_1 + p->dk_df0_1[c] * diffuse_b + k_rho * ddiffuse_unit_df0_1;
 
     /* ∂(K ρ)/∂ρ = K² (K = 1/(1 − ρ F̄_i e^{−4τ})) */
-    row[CF_CLAY_ALBEDO + c] = phi[c] * diffuse_unit * k * k;
-    row[CF_CLAY_DIFFUSE_ROUGHNESS] = phi[c] * k_rho * transmission_b * don_dsigma;
+    row[CF_CLAY_ALBEDO + c] = phi * w->diffuse_unit * k * k;
+    row[CF_CLAY_DIFFUSE_ROUGHNESS] = phi * k_rho * w->transmission_b * don_dsigma;
     row[CF_CLAY_FILM_ROUGHNESS] = dtop_dr1;
-    row[CF_CLAY_FILM_F0] = dtop_df0_1 + dphi_df0_1 * base[c] + phi[c] * dbase_df0_1;
-    row[CF_CLAY_OPTICAL_DEPTH + c] = phi[c] * (-path * base[c] + p->dk_dtau[c] * diffuse_b);
-    row[CF_CLAY_BASE_ROUGHNESS] = phi[c] * dbase_spec_dr2;
-    row[CF_CLAY_BASE_F0] = phi[c] * (dbase_spec_df0_2 + k_rho * on * dtransmission_b_df0_2);
-    if (tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi[c] * dbase_spec_dtail;
+    row[CF_CLAY_FILM_F0] = dtop_df0_1 + dphi_df0_1 * base + phi * dbase_df0_1;
+    row[CF_CLAY_OPTICAL_DEPTH + c] = phi * (-w->path * base + p->dk_dtau[c] * diffuse_b);
+    row[CF_CLAY_BASE_ROUGHNESS] = phi * dbase_spec_dr2;
+    row[CF_CLAY_BASE_F0] = phi * (dbase_spec_df0_2 + k_rho * w->on * dtransmission_b_df0_2);
+    if (tailed) row[CF_CLAY_TAILED_TAIL] = dtop_dtail + phi * dbase_spec_dtail;
   }
+}
+
+CF_ALWAYS_INLINE void clay_eval(const cf_clay_prep *p, const cf_geometry *g, double f[3],
+                                double *grad, int dim, int tailed, cf_clay_terms *terms,
+                                const clay_given *given) {
+  clay_forward w;
+  clay_top(p, g, grad != NULL, tailed, given, &w);
+  clay_film(p, g, given, &w);
+  clay_base(p, grad != NULL, tailed, given, &w);
+  clay_combine(p, &w, f);
+  if (terms) clay_store_terms(p, &w, terms);
+  if (grad) clay_gradient(p, g, &w, grad, dim, tailed);
 }
 
 static void clay_value(const cf_prepared *prep, const cf_geometry *g, double f[3]) {

@@ -212,7 +212,7 @@ extern const unsigned char cf_std_octave_log2_steps[CF_STD_TABLE_OCTAVES];
 double cf_std_table_position(int k);
 
 /* The table at γ, from the precomputed grid over γ (tailed_grid.c, written
- * from the exact nodes by gen/tailed_grid_gen.c; cubic Hermite in
+ * from the exact nodes by tools/tailed_grid_gen.c; cubic Hermite in
  * p = 1/(γ − 1) between its nodes, whose ∂/∂γ are again exact derivatives
  * of the result): about 0.7 µs. Builds nothing (built = 0) where the lobe
  * needs no table (γ <= 1.5, γ >= 1e6). */
@@ -229,7 +229,7 @@ void cf_std_table_nodes_exact(cf_std_node node[CF_STD_TABLE_NODES], double gamma
  * through GGX (j = 16, exactly) to γ = 1.5 + 2.5e-7 (j = 32). Each entry holds
  * h = g f, ∂h/∂w, ∂h/∂p, ∂²h/∂w∂p with f = 1 − p/2, which takes out the
  * pole 1/(2γ − 3) of g at γ → 1.5. Written from the exact nodes by
- * gen/tailed_grid_gen.c at every build (src/model/CMakeLists.txt). */
+ * tools/tailed_grid_gen.c at every build (src/model/CMakeLists.txt). */
 #define CF_STD_GRID_STEP ((1.0 - 1.0 / (CF_STD_GAMMA_BECKMANN - 1.0)) / 16.0)
 static inline double std_grid_p(int j) {
   return 1.0 + (j - 16) * CF_STD_GRID_STEP;

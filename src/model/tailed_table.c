@@ -1,5 +1,5 @@
 /* The STD masking's table at one γ, sliced from the grid over γ
- * (tailed_grid.c, written by gen/tailed_grid_gen.c; docs/model.md §2.8,
+ * (tailed_grid.c, written by tools/tailed_grid_gen.c; docs/model.md §2.8,
  * "The table"). */
 #include "tailed.h"
 

@@ -11,7 +11,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "clayfit/export.h"
+#include "clayfit/shader.h"
 #include "clayfit/thumbnail.h"
 #include "core/file.h"
 #include "core/vec.h"
@@ -181,7 +181,7 @@ static cf_status write_material(const report_data *d, const char *dir, const cha
   char module_path[4200], script_path[4200];
   snprintf(module_path, sizeof module_path, "%s/viewer/material.mjs", dir);
   snprintf(script_path, sizeof script_path, "%s/viewer/material.js", dir);
-  cf_status s = cf_export_write(d->fit, fit_path, CF_EXPORT_GLSL, module_path, NULL, err);
+  cf_status s = cf_shader_write(d->fit, fit_path, CF_SHADER_GLSL, module_path, err);
   char *module = NULL, *script = NULL;
   size_t size = 0, script_size = 0;
   if (s == CF_OK) s = cf_read_file(module_path, VIEWER_MAX_FILE, &module, &size, err);

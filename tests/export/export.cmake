@@ -1,14 +1,10 @@
 # Reading fit.json back, and the material presets (clayfit export).
 clayfit_c_test(test_fit_read SOURCES export/test_fit_read.c LIBS clayfit_fit_test_support
                LABELS "fit;export")
-# The GGX that best reproduces a tailed (STD) lobe, for the GGX-only formats
-# (docs/presets.md, "Tailed lobes in GGX-only formats").
-clayfit_c_test(test_tailed_ggx SOURCES export/test_tailed_ggx.c LIBS clayfit_export
+# The note of a tailed lobe's GGX in the GGX-only formats (the GGX itself:
+# test_tailed_ggx, tests/CMakeLists.txt).
+clayfit_c_test(test_tailed_note SOURCES export/test_tailed_note.c LIBS clayfit_export
                LABELS export)
-# M4T's base lobe, fitted under the film and as if in air, measured in the
-# model (7-10 s: slow).
-clayfit_c_test(test_tailed_base SOURCES export/test_tailed_base.c LIBS clayfit_export
-               LABELS "export;slow")
 
 # One fit.json per model (tests/export/make_fits.py: schema-valid, written
 # without fitting), each exported to every format and the file validated by

@@ -217,6 +217,11 @@ target_include_directories(test_lsq_extrapolate PRIVATE ${PROJECT_SOURCE_DIR}/sr
 # evaluation the same on many threads at once, its cost that of the
 # predictions, its gradient (gains per light inside the sums too), the slot
 # lookup (cf_model_slot_param).
+# The one sampler (private to src/fit): weights that add up to the
+# population, no observation twice, the highlights' quarter, a population
+# of fewer than 16 (its threshold read one past the array), image by image.
+clayfit_c_test(test_fit_sample SOURCES fit/test_fit_sample.c LIBS clayfit_fit LABELS fit)
+target_include_directories(test_fit_sample PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)
 clayfit_c_test(test_fit_problem SOURCES fit/test_fit_problem.c LIBS clayfit_fit_test_support
                LABELS fit)
 target_include_directories(test_fit_problem PRIVATE ${PROJECT_SOURCE_DIR}/src/fit)

@@ -36,24 +36,24 @@ static void check_residual(void) {
   static const double zs[] = {-36.0, -8.0, -2.0, -0.5, 0.0, 0.7, 3.0, 9.0};
   for (size_t k = 0; k < sizeof zs / sizeof *zs; ++k) {
     double z = zs[k], slope, up, down, h = 1e-5;
-    double t = fit_problem_censored_residual(z, &slope);
+    double t = fit_censored_residual(z, &slope);
     double phi = 0.5 * erfc(-z / sqrt(2.0));
     CHECK(t < 0.0 && fabs(t * t + 2.0 * log(phi)) <= 1e-9 * fmax(1.0, t * t), "z %g: t %.17g", z,
           t);
     double numeric =
-        (fit_problem_censored_residual(z + h, &up) - fit_problem_censored_residual(z - h, &down)) /
+        (fit_censored_residual(z + h, &up) - fit_censored_residual(z - h, &down)) /
         (2.0 * h);
     CHECK(slope > 0.0 && fabs(slope - numeric) <= 1e-5 * fmax(1.0, slope), "z %g: slope %g, %g", z,
           slope, numeric);
   }
   double slope;
-  CHECK(fabs(fit_problem_censored_residual(-36.0, &slope) + 36.0) < 0.2, "t(-36) is about -36");
-  CHECK(fit_problem_censored_residual(40.0, &slope) == 0.0 && slope == 0.0, "t(40) = 0");
+  CHECK(fabs(fit_censored_residual(-36.0, &slope) + 36.0) < 0.2, "t(-36) is about -36");
+  CHECK(fit_censored_residual(40.0, &slope) == 0.0 && slope == 0.0, "t(40) = 0");
   /* far below (erfc underflows): still about z, and continuous at −37 */
-  double t = fit_problem_censored_residual(-200.0, &slope);
+  double t = fit_censored_residual(-200.0, &slope);
   CHECK(fabs(t + 200.0) < 0.1 && fabs(slope - 1.0) < 1e-3, "t(-200) %g, slope %g", t, slope);
-  double below = fit_problem_censored_residual(-37.0 - 1e-9, &slope);
-  CHECK(fabs(below - fit_problem_censored_residual(-37.0 + 1e-9, &slope)) < 1e-6,
+  double below = fit_censored_residual(-37.0 - 1e-9, &slope);
+  CHECK(fabs(below - fit_censored_residual(-37.0 + 1e-9, &slope)) < 1e-6,
         "t is continuous at -37: %.17g", below);
 }
 

@@ -24,10 +24,10 @@
 #include <string.h>
 
 #include "clayfit/model.h"
-#include "core/parallel.h"
-#include "fit_problem.h"
+#include "problem/problem.h"
 #include "fit_support.h"
 #include "lsq/lsq.h"
+#include "core/parallel.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
@@ -56,24 +56,27 @@ static void test_slot_param(void) {
  * built over them. */
 static void test_many_unknowns(const cf_capture *capture) {
   enum { MANY = 2500 };
-  fit_problem p;
+  fit_problem *p;
   cf_error err = {0};
-  CHECK(fit_problem_init(&p, capture, CF_MODEL_LAMBERT, NULL, 0, 1, &err) == CF_OK, "init: %s",
+  CHECK(fit_problem_new(&p, capture, CF_MODEL_LAMBERT, NULL, 0, 1, &err) == CF_OK, "init: %s",
         err.message);
+  if (!p) return;
   for (int round = 0; round < 2; ++round) { /* declared twice: the arrays kept */
-    fit_problem_clear_unknowns(&p);
-    for (int i = 0; i < MANY; ++i) fit_problem_free_slot(&p, i % 3);
-    CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
-    CHECK(p.num_unknowns == MANY, "%d unknowns declared, %d kept", MANY, p.num_unknowns);
+    fit_problem_clear_unknowns(p);
+    for (int i = 0; i < MANY; ++i) fit_problem_free_slot(p, i % 3);
+    CHECK(fit_problem_finish(p, &err) == CF_OK, "finish: %s", err.message);
+    CHECK(p->unknowns.num == MANY, "%d unknowns declared, %d kept", MANY, p->unknowns.num);
     int kept = 1;
-    for (int i = 0; i < p.num_unknowns; ++i)
-      kept = kept && p.unknowns[i].kind == FIT_LOG_SLOT && p.unknowns[i].slot == i % 3 &&
-             p.lower[i] == log(FIT_ALBEDO_FLOOR) && p.upper[i] == 0.0 && p.at_bound[i] == 0;
+    for (int i = 0; i < p->unknowns.num; ++i)
+      kept = kept && p->unknowns.unknown[i].kind == &fit_kind_material &&
+             p->unknowns.unknown[i].slot == i % 3 &&
+             p->unknowns.lower[i] == log(FIT_ALBEDO_FLOOR) && p->unknowns.upper[i] == 0.0 &&
+             p->unknowns.at_bound[i] == 0;
     CHECK(kept, "an unknown or its bounds overwritten");
-    size_t columns = p.block_column_begin[p.num_blocks] - p.block_column_begin[0];
-    CHECK(columns == (size_t)MANY * p.num_blocks, "%zu block columns", columns);
+    size_t columns = p->blocks.column_begin[p->blocks.count] - p->blocks.column_begin[0];
+    CHECK(columns == (size_t)MANY * p->blocks.count, "%zu block columns", columns);
   }
-  fit_problem_release(&p);
+  fit_problem_free(p);
 }
 
 /* Every block's cost, JᵀJ and Jᵀu at x, for cf_parallel_for. */
@@ -87,7 +90,7 @@ typedef struct block_job {
 
 static void evaluate_block(void *user, int i) {
   const block_job *job = user;
-  size_t b = (size_t)i % job->p->num_blocks;
+  size_t b = (size_t)i % job->p->blocks.count;
   job->status[i] =
       fit_problem_evaluate(job->p, job->x, b, &job->cost[i], job->jtj + (size_t)i * job->k * job->k,
                            job->jtu + (size_t)i * job->k);
@@ -97,7 +100,7 @@ static void evaluate_block(void *user, int i) {
  * threads at once: the same bits each time. */
 static void test_threads(fit_problem *p, const double *x) {
   enum { THREADS = 24, REPEAT = 6 };
-  size_t k = (size_t)p->num_unknowns, n = p->num_blocks, calls = n * (REPEAT + 1);
+  size_t k = (size_t)p->unknowns.num, n = p->blocks.count, calls = n * (REPEAT + 1);
   block_job job = {p,
                    x,
                    k,
@@ -135,7 +138,7 @@ done:
  * fit_problem_predict at the values x stands for (no loss, σ = 1, nothing
  * censored: the synthetic capture clips nothing). */
 static void test_cost_is_prediction(fit_problem *p, const double *x, const char *what) {
-  size_t k = (size_t)p->num_unknowns, m = 3 * p->count;
+  size_t k = (size_t)p->unknowns.num, m = 3 * p->rows.count;
   double total = 0.0, expected = 0.0, cost;
   double *jtj = malloc(k * k * sizeof *jtj), *jtu = malloc(k * sizeof *jtu);
   double *prediction = malloc(m * sizeof *prediction), *measured = malloc(m * sizeof *measured);
@@ -144,7 +147,7 @@ static void test_cost_is_prediction(fit_problem *p, const double *x, const char 
     CHECK(0, "out of memory");
     goto done;
   }
-  for (size_t b = 0; b < p->num_blocks; ++b) {
+  for (size_t b = 0; b < p->blocks.count; ++b) {
     CHECK(fit_problem_evaluate(p, x, b, &cost, b % 2 ? jtj : NULL, jtu) == CF_LSQ_EVALUATED,
           "%s: block %zu", what, b);
     total += cost;
@@ -154,9 +157,9 @@ static void test_cost_is_prediction(fit_problem *p, const double *x, const char 
   for (size_t i = 0; i < m; ++i)
     expected += 0.5 * (prediction[i] - measured[i]) * (prediction[i] - measured[i]);
   int response_free = 0;
-  for (int u = 0; u < p->num_unknowns; ++u) response_free |= p->unknowns[u].kind == FIT_RESPONSE;
+  for (int u = 0; u < p->unknowns.num; ++u) response_free |= p->unknowns.unknown[u].kind == &fit_kind_response;
   for (int j = 0; response_free && j + 1 < CF_RESPONSE_MODEL_KNOTS; ++j) {
-    double r = (p->response[j + 1] - p->response[j]) / FIT_RESPONSE_PRIOR_SD;
+    double r = (p->values.response[j + 1] - p->values.response[j]) / FIT_RESPONSE_PRIOR_SD;
     expected += 0.5 * r * r; /* the smoothness prior's */
   }
   CHECK(fabs(total - expected) <= 1e-9 * expected, "%s: cost %.17g, from the predictions %.17g",
@@ -170,10 +173,10 @@ done:
 
 /* The cost over every block at x, and with g its gradient Σ Jᵀu (k). */
 static double total_cost(fit_problem *p, const double *x, double *g) {
-  size_t k = (size_t)p->num_unknowns;
+  size_t k = (size_t)p->unknowns.num;
   double *jtj = malloc(k * k * sizeof *jtj), *jtu = malloc(k * sizeof *jtu), total = 0.0, cost;
   for (size_t a = 0; g && a < k; ++a) g[a] = 0.0;
-  for (size_t b = 0; jtj && jtu && b < p->num_blocks; ++b) {
+  for (size_t b = 0; jtj && jtu && b < p->blocks.count; ++b) {
     fit_problem_evaluate(p, x, b, &cost, g ? jtj : NULL, jtu);
     total += cost;
     const int *column;
@@ -188,7 +191,7 @@ static double total_cost(fit_problem *p, const double *x, double *g) {
 /* The analytic gradient against central differences of the cost, every
  * unknown; a wrong ∂R/∂a_j or chain rule shows here. */
 static void test_gradient(fit_problem *p, const double *x) {
-  size_t k = (size_t)p->num_unknowns;
+  size_t k = (size_t)p->unknowns.num;
   double g[64], y[64], scale = 0.0;
   total_cost(p, x, g);
   for (size_t a = 0; a < k; ++a) scale = fmax(scale, fabs(g[a]));
@@ -201,123 +204,124 @@ static void test_gradient(fit_problem *p, const double *x) {
     double down = total_cost(p, y, NULL);
     double fd = (up - down) / (2.0 * h);
     double off = fabs(fd - g[a]) / fmax(fabs(g[a]), 1e-3 * scale);
-    CHECK(off < 1e-4, "unknown %zu (kind %d, slot %d): gradient %.9g, central difference %.9g", a,
-          (int)p->unknowns[a].kind, p->unknowns[a].slot, g[a], fd);
+    CHECK(off < 1e-4, "unknown %zu (%s, slot %d): gradient %.9g, central difference %.9g", a,
+          p->unknowns.unknown[a].kind->name, p->unknowns.unknown[a].slot, g[a], fd);
   }
 }
 
 /* M2 with every slot, the scale and the exposures free, a little off the
  * truth (and again with a response curve). */
 static void test_evaluate(const cf_capture *capture) {
-  fit_problem p;
+  fit_problem *p;
   cf_error err = {0};
-  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
+  if (fit_problem_new(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
     CHECK(0, "init: %s", err.message);
     return;
   }
-  fit_problem_set_sigma(&p, capture, 1.0);
-  p.loss = CF_LOSS_NONE;
-  p.block_size = 256; /* blocks of one image, and of two */
-  fit_problem_clear_unknowns(&p);
-  for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
-  fit_problem_free_scale(&p);
-  fit_problem_free_exposures(&p);
-  CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+  fit_problem_set_sigma(p, 1.0);
+  p->loss = CF_LOSS_NONE;
+  p->blocks.size = 256; /* blocks of one image, and of two */
+  fit_problem_clear_unknowns(p);
+  for (int k = 0; k < p->dim; ++k) fit_problem_free_slot(p, k);
+  fit_problem_free_scale(p);
+  fit_problem_free_exposures(p);
+  CHECK(fit_problem_finish(p, &err) == CF_OK, "finish: %s", err.message);
   double x[64];
-  CHECK(p.num_unknowns <= 64, "%d unknowns", p.num_unknowns);
-  fit_problem_get_x(&p, x);
-  for (int u = 0; u < p.num_unknowns; ++u) x[u] += 0.01 * (u % 5 - 2); /* inside the bounds */
-  test_threads(&p, x);
-  test_cost_is_prediction(&p, x, "linear");
+  CHECK(p->unknowns.num <= 64, "%d unknowns", p->unknowns.num);
+  fit_problem_get_x(p, x);
+  for (int u = 0; u < p->unknowns.num; ++u) x[u] += 0.01 * (u % 5 - 2); /* inside the bounds */
+  test_threads(p, x);
+  test_cost_is_prediction(p, x, "linear");
   const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.8, 0.7, 0.9, 1.1, 1.3, 1.2};
-  memcpy(p.response, slopes, sizeof slopes);
-  fit_problem_clear_unknowns(&p);
-  for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
-  fit_problem_free_scale(&p);
-  fit_problem_free_exposures(&p);
-  fit_problem_free_response(&p);
-  CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
-  fit_problem_get_x(&p, x);
-  test_threads(&p, x);
-  test_cost_is_prediction(&p, x, "with a response curve");
-  test_gradient(&p, x);
-  fit_problem_release(&p);
+  memcpy(p->values.response, slopes, sizeof slopes);
+  fit_problem_clear_unknowns(p);
+  for (int k = 0; k < p->dim; ++k) fit_problem_free_slot(p, k);
+  fit_problem_free_scale(p);
+  fit_problem_free_exposures(p);
+  fit_problem_free_response(p);
+  CHECK(fit_problem_finish(p, &err) == CF_OK, "finish: %s", err.message);
+  fit_problem_get_x(p, x);
+  test_threads(p, x);
+  test_cost_is_prediction(p, x, "with a response curve");
+  test_gradient(p, x);
+  fit_problem_free(p);
 }
 
 /* A gain per light inside the sums: a capture whose images each have a
  * directional light (slot 0) and the flash (slot 1). */
 static void test_light_gains(const cf_capture *capture) {
-  fit_problem p;
+  fit_problem *p;
   cf_error err = {0};
-  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
+  if (fit_problem_new(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 2, &err) != CF_OK) {
     CHECK(0, "init: %s", err.message);
     return;
   }
   char name[2][96];
   cf_capture_light_name(capture, 3, 0, name[0], sizeof name[0]);
   cf_capture_light_name(capture, 3, 1, name[1], sizeof name[1]);
-  CHECK(p.lights == 2 && p.light_count == 2 && p.several_lights && p.image_lights == 2 &&
-            p.slot_light[6] == 0 && p.slot_light[7] == 1 && !strcmp(name[0], "light 1") &&
+  const fit_groups *g = &p->groups;
+  CHECK(g->lights == 2 && g->light_count == 2 && g->several_lights && g->image_lights == 2 &&
+            g->slot_light[6] == 0 && g->slot_light[7] == 1 && !strcmp(name[0], "light 1") &&
             !strcmp(name[1], "light 2"),
-        "two lights in every image: %d slots, %zu lights (%s, %s)", p.lights, p.light_count,
+        "two lights in every image: %d slots, %zu lights (%s, %s)", g->lights, g->light_count,
         name[0], name[1]);
-  fit_problem_set_sigma(&p, capture, 1.0);
-  p.loss = CF_LOSS_NONE;
-  p.block_size = 256;
+  fit_problem_set_sigma(p, 1.0);
+  p->loss = CF_LOSS_NONE;
+  p->blocks.size = 256;
   const double slopes[CF_RESPONSE_MODEL_KNOTS] = {0.8, 0.7, 0.9, 1.1, 1.3, 1.2};
   /* each pass starts from the same parameters, a little off them: carried
    * over, the second pass put f0 on its bound 0, where the exact Fresnel
    * (model version 2) has a one-sided derivative only and a central
    * difference straddles the bound */
   double start[CF_MAX_DIM];
-  memcpy(start, p.params, sizeof start);
+  memcpy(start, p->values.params, sizeof start);
   for (int curve = 0; curve < 2; ++curve) {
-    memcpy(p.params, start, sizeof start);
-    if (curve) memcpy(p.response, slopes, sizeof slopes);
-    fit_problem_clear_unknowns(&p);
-    for (int k = 0; k < p.dim; ++k) fit_problem_free_slot(&p, k);
-    fit_problem_free_light_gains(&p);
-    if (curve) fit_problem_free_response(&p);
-    CHECK(fit_problem_finish(&p, &err) == CF_OK, "finish: %s", err.message);
+    memcpy(p->values.params, start, sizeof start);
+    if (curve) memcpy(p->values.response, slopes, sizeof slopes);
+    fit_problem_clear_unknowns(p);
+    for (int k = 0; k < p->dim; ++k) fit_problem_free_slot(p, k);
+    fit_problem_free_light_gains(p);
+    if (curve) fit_problem_free_response(p);
+    CHECK(fit_problem_finish(p, &err) == CF_OK, "finish: %s", err.message);
     double x[64];
-    fit_problem_get_x(&p, x);
-    for (int u = 0; u < p.num_unknowns; ++u) x[u] += 0.01 * (u % 5 - 2);
-    x[p.num_unknowns - (curve ? 1 + CF_RESPONSE_MODEL_KNOTS : 1)] = 0.2; /* log g of light 1 */
-    test_threads(&p, x);
-    test_cost_is_prediction(&p, x, curve ? "light gains, a response curve" : "light gains");
-    test_gradient(&p, x);
+    fit_problem_get_x(p, x);
+    for (int u = 0; u < p->unknowns.num; ++u) x[u] += 0.01 * (u % 5 - 2);
+    x[p->unknowns.num - (curve ? 1 + CF_RESPONSE_MODEL_KNOTS : 1)] = 0.2; /* log g of light 1 */
+    test_threads(p, x);
+    test_cost_is_prediction(p, x, curve ? "light gains, a response curve" : "light gains");
+    test_gradient(p, x);
   }
-  fit_problem_release(&p);
+  fit_problem_free(p);
 }
 
 /* The noise model's σ at the measurements through the curve R(x) = √x
  * (every slope 1/2): R'(x) √(read² + shot x), x = y², R'(x) = 1/(2y). */
 static void test_noise_through_curve(const cf_capture *capture) {
-  fit_problem p;
+  fit_problem *p;
   cf_error err = {0};
-  if (fit_problem_init(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 1, &err) != CF_OK) {
+  if (fit_problem_new(&p, capture, CF_MODEL_DIELECTRIC, NULL, 0, 1, &err) != CF_OK) {
     CHECK(0, "init: %s", err.message);
     return;
   }
   cf_capture_summary about;
   cf_capture_summarize(capture, &about);
   CHECK(fit_capture_has_noise(capture), "the capture has a noise model");
-  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) p.response[j] = 0.5;
-  fit_problem_clear_unknowns(&p);
-  fit_problem_free_response(&p);
-  fit_problem_set_sigma(&p, capture, 1.0);
+  for (int j = 0; j < CF_RESPONSE_MODEL_KNOTS; ++j) p->values.response[j] = 0.5;
+  fit_problem_clear_unknowns(p);
+  fit_problem_free_response(p);
+  fit_problem_set_sigma(p, 1.0);
   double read2 = about.noise_read * about.noise_read, worst = 0.0;
   size_t checked = 0;
-  for (size_t i = 0; i < 3 * p.count; ++i) {
-    double y = p.y[i], x = y * y;
+  for (size_t i = 0; i < 3 * p->rows.count; ++i) {
+    double y = p->rows.y[i], x = y * y;
     if (!(x > cf_response_model_knot(CF_RESPONSE_MODEL_KNOTS - 1))) continue;
     double sigma = sqrt(read2 + about.noise_shot * x) / (2.0 * y);
-    worst = fmax(worst, fabs(1.0 / p.inv_sigma[i] / sigma - 1.0));
+    worst = fmax(worst, fabs(1.0 / p->rows.inv_sigma[i] / sigma - 1.0));
     ++checked;
   }
   CHECK(checked > 100 && worst < 1e-9, "σ through the curve: %zu values, worst relative error %g",
         checked, worst);
-  fit_problem_release(&p);
+  fit_problem_free(p);
 }
 
 int main(void) {

@@ -16,7 +16,8 @@ INSTRUMENT := -fsanitize=fuzzer-no-link $(SANITIZE)
 LIBS := -Wl,--as-needed -lOpenImageIO -lOpenImageIO_Util -ljansson -lm
 
 CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c src/core/order_statistics.c
-MODEL := $(wildcard src/model/*.c)
+# the model without its least-squares fits (tailed_ggx.c is clayfit_model_fit, on lsq and Ceres)
+MODEL := $(filter-out src/model/tailed_ggx.c,$(wildcard src/model/*.c))
 # the STD masking's grid, generated as the CMake build does (src/model/CMakeLists.txt)
 GRID := $(OUT)/gen/tailed_grid.c
 COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/colmap_binary.c \
@@ -51,7 +52,7 @@ endef
 $(foreach t,$(TARGETS),$(eval $(call link_target,$(t),-fsanitize=fuzzer $(SANITIZE))))
 $(foreach t,$(WRITERS),$(eval $(call link_target,$(t),-fsanitize=fuzzer-no-link $(SANITIZE))))
 
-$(OUT)/gen/tailed_grid_gen: src/model/gen/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
+$(OUT)/gen/tailed_grid_gen: tools/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
 	@mkdir -p $(@D)
 	$(CC) -std=c11 -O2 -ffp-contract=off -Iinclude -Isrc $(filter %.c,$^) -lm -o $@
 
