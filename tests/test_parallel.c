@@ -1,4 +1,4 @@
-/* The one thread pool (src/core/parallel.h): every i called exactly once
+/* The one thread pool (src/core/include/core/parallel.h): every i called exactly once
  * for counts and thread counts around the edges (0 items, more threads
  * than items, more than the pool's cap), i = 0 on the calling thread, the
  * calls in order on one thread, a pool inside a pool, and cf_part_range's

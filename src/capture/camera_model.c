@@ -18,7 +18,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 #include "clayfit/colmap.h"
 #include "core/vec.h"
 

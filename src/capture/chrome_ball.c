@@ -7,7 +7,7 @@
  * back-projection is the cone of rays tangent to the ball; the ball is put
  * at distance 1 on its axis with radius sin(half-angle) (a mirror ball's
  * directions do not depend on its scale), and the pixel's ray meets it. */
-#include "chrome_ball.h"
+#include "capture/chrome_ball.h"
 
 #include <math.h>
 #include <stdio.h>

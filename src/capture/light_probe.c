@@ -1,4 +1,4 @@
-/* Light probes from chrome-ball photos (src/capture/light_probe.h): an
+/* Light probes from chrome-ball photos (src/capture/include/capture/light_probe.h): an
  * exposure-bracket merge after P. Debevec and J. Malik, "Recovering High
  * Dynamic Range Radiance Maps from Photographs", SIGGRAPH 1997 (eq. 6 and
  * its hat weight; the response is the declared transfer, not recovered),
@@ -10,7 +10,7 @@
 #include "core/order_statistics.h"
 #include "core/vec.h"
 #include "envmap.h"
-#include "light_probe.h"
+#include "capture/light_probe.h"
 
 #define MAX_BRACKETS CF_MAX_BRACKETS
 /* 8 × 8 reads a map pixel cover balls up to r = 16 H / π (1300 px at the

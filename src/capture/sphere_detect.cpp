@@ -1,5 +1,5 @@
 // The sphere's silhouette in one image: a thin adapter over OpenCV 4.6
-// (src/capture/sphere_silhouette.h). C linkage; no exception leaves it.
+// (src/capture/include/capture/sphere_silhouette.h). C linkage; no exception leaves it.
 //
 // Pixel convention. OpenCV puts the centre of pixel (col, row) at the
 // integer point (col, row); COLMAP (and cf_image) at (col + 0.5, row + 0.5).
@@ -53,7 +53,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/vec.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 namespace {
 

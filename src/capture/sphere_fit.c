@@ -1,5 +1,5 @@
 /* The sphere from its silhouettes in several views, and the normals of a
- * sphere seen orthographically (src/capture/sphere_silhouette.h).
+ * sphere seen orthographically (src/capture/include/capture/sphere_silhouette.h).
  *
  * Every silhouette ray of a view is tangent to the sphere, so the distance
  * from the sphere's centre C to the ray's line equals the radius R. The fit
@@ -16,7 +16,7 @@
 #include "core/vec.h"
 #include "lsq/linalg.h"
 #include "lsq/lsq.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 /* A reciprocal condition number below this makes a matrix singular here. */
 #define RCOND_MIN 1e-12

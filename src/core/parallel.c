@@ -1,6 +1,6 @@
 /* The one thread pool (parallel.h). */
 #define _POSIX_C_SOURCE 200809L /* pthreads */
-#include "parallel.h"
+#include "core/parallel.h"
 
 #include <pthread.h>
 

@@ -1,5 +1,5 @@
 /* What the export formats share: the physics of the mapping
- * (export_mapping.c), and, from the layer below (src/shader/preset_text.h),
+ * (export_mapping.c), and, from the layer below (src/shader/include/shader/preset_text.h),
  * the text, the notes and the provenance of every material file. Private to
  * src/export. */
 #ifndef CLAYFIT_EXPORT_INTERNAL_H

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/parallel.h"
-#include "lsq.h"
+#include "lsq/lsq.h"
 
 namespace lsq {
 

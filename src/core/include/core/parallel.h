@@ -6,8 +6,8 @@
  * out in increasing i, i = 0 on this thread; returns when all are done.
  * Each call must touch only what is its own (results go to slot i), or
  * lock what it shares. With threads <= 1, or when no thread can be
- * started, the calls run here in order. Private to the layers of
- * src/. */
+ * started, the calls run here in order. An interface of core
+ * to the layers above (src/core/include), never a public header. */
 #ifndef CLAYFIT_CORE_PARALLEL_H
 #define CLAYFIT_CORE_PARALLEL_H
 

@@ -7,7 +7,7 @@
 #include <math.h>
 #include <stdint.h>
 
-#include "vec.h"
+#include "core/vec.h"
 
 typedef struct cf_rng {
   uint64_t s[4];
