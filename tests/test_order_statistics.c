@@ -1,4 +1,4 @@
-/* The order statistics every layer uses (src/core/order_statistics.h),
+/* The order statistics every layer uses (src/core/include/core/order_statistics.h),
  * against a full sort: the k-th smallest for every k of random arrays
  * with many ties and with none, the median of odd and even counts, and the
  * weighted median against its definition. */

@@ -8,7 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "model/tailed.h"
+#include "tailed.h" /* src/model: the generator is the model's own */
 
 /* The grid's entries at γ node j: h, ∂h/∂w, ∂h/∂p, ∂²h/∂w∂p per node. */
 static void grid_row(int j, double row[CF_STD_TABLE_NODES][4]) {
@@ -42,7 +42,7 @@ static int write_grid(const char *path) {
           "/* Generated at build time by tools/tailed_grid_gen.c. The STD\n"
           " * masking's grid over gamma (tailed.h, docs/model.md 2.8 \"The table\"). */\n"
           "/* clang-format off */\n"
-          "#include \"model/tailed.h\"\n\n"
+          "#include \"tailed.h\"\n\n"
           "const double cf_std_grid[CF_STD_GRID_GAMMAS][CF_STD_TABLE_NODES][4] = {\n");
   int bad = 0;
   for (int j = 0; j < CF_STD_GRID_GAMMAS; ++j) {

@@ -52,7 +52,7 @@ struct ObservationResidual {
 // observation, Ceres forming J) around clayfit's own model, so that the
 // only difference from clayfit is the layout of the problem (clayfit hands
 // Ceres each block of a thousand observations compressed to its normal
-// equations, src/lsq/lsq.h).
+// equations, src/lsq/include/lsq/lsq.h).
 class ObservationAnalytic final : public ceres::CostFunction {
  public:
   ObservationAnalytic(const Data *d, size_t i) : d_(d), i_(i) {

@@ -18,8 +18,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 #include "clayfit/colmap.h"
+#include "core/vec.h"
 
 typedef struct camera_model_info {
   const char *name;
@@ -508,9 +509,8 @@ int cf_camera_unproject(const cf_camera *camera, const double uv[2], double ray[
     return 0;
 
   if (uses_equidistant_plane(camera->model)) {
-    const double half_pi = 1.57079632679489661923;
     const double theta = sqrt(x[0] * x[0] + x[1] * x[1]);
-    if (!(theta < half_pi)) return 0; /* no direction in front of the camera */
+    if (!(theta < 0.5 * CF_PI)) return 0; /* no direction in front of the camera */
     const double scale = theta > 0.0 ? sin(theta) / theta : 1.0;
     ray[0] = x[0] * scale;
     ray[1] = x[1] * scale;

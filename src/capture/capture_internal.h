@@ -10,7 +10,7 @@
 #include "clayfit/colmap.h"
 #include "clayfit/image.h"
 #include "lights.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 /* One image's camera. */
 typedef struct capture_view {

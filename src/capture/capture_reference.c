@@ -17,18 +17,13 @@
 
 #include "capture_internal.h"
 #include "core/order_statistics.h"
+#include "core/vec.h"
 
-#define REFERENCE_PI 3.14159265358979323846
-
-enum { MIN_REFERENCE_PIXELS = 16 };
+enum { MIN_CF_PIXELS = 16 };
 
 /* The channels' median ratios may disagree by this much (relative to s)
  * before a warning says the albedo given may be wrong. */
 static const double channel_tolerance = 0.03;
-
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* Where pixel (x, y)'s centre ray meets the target's plane, in world
  * coordinates (COLMAP cameras with a point on the plane). */
@@ -45,10 +40,10 @@ static cf_status target_point(const cf_capture *capture, size_t k, int x, int y,
                         spec->path, x, y, spec->image_names[k]);
   for (int i = 0; i < 3; ++i) /* d_world = Rᵀ d_camera */
     d[i] = view->r[i] * ray[0] + view->r[3 + i] * ray[1] + view->r[6 + i] * ray[2];
-  double facing = dot3(r->normal, d);
+  double facing = cf_dot3(r->normal, d);
   double to_plane[3] = {r->point[0] - view->c[0], r->point[1] - view->c[1],
                         r->point[2] - view->c[2]};
-  double t = dot3(r->normal, to_plane) / facing;
+  double t = cf_dot3(r->normal, to_plane) / facing;
   if (!(facing < 0.0) || !(t > 0.0) || !isfinite(t))
     return cf_error_set(err, CF_EINVAL,
                         "%s: reference: at pixel (%d, %d) of %s the camera sees %s (normal %g %g "
@@ -73,11 +68,11 @@ static void predicted_radiance(const cf_capture *capture, size_t k, const double
   for (int j = 0; j < capture->light_counts[k]; ++j) {
     double l[3], e[3];
     if (!cf_light_at(&lights[j], view->r, view->c, x, l, e)) continue;
-    double cosine = dot3(r->normal, l);
+    double cosine = cf_dot3(r->normal, l);
     if (cosine > 0.0)
       for (int c = 0; c < 3; ++c) sum[c] += e[c] * cosine;
   }
-  for (int c = 0; c < 3; ++c) out[c] = r->albedo[c] / REFERENCE_PI * sum[c];
+  for (int c = 0; c < 3; ++c) out[c] = r->albedo[c] / CF_PI * sum[c];
 }
 
 /* Every unclipped pixel's measured / predicted ratios, three per pixel,
@@ -126,12 +121,12 @@ static cf_status measure(cf_capture *capture, const cf_image *image, const cf_de
                         "%s: reference.region: %zu of its pixels in %s see the sphere; the "
                         "region must show the reference target only",
                         spec->path, on_sphere, spec->image_names[k]);
-  if (*used < MIN_REFERENCE_PIXELS)
+  if (*used < MIN_CF_PIXELS)
     return cf_error_set(err, CF_EINVAL,
                         "%s: reference.region: only %zu of its %lld pixels in %s are usable (%zu "
                         "clipped); at least %d are needed",
                         spec->path, *used, (long long)(box[2] - box[0]) * (box[3] - box[1]),
-                        spec->image_names[k], *clipped, MIN_REFERENCE_PIXELS);
+                        spec->image_names[k], *clipped, MIN_CF_PIXELS);
   return CF_OK;
 }
 

@@ -13,12 +13,9 @@
 #include <string.h>
 
 #include "capture_internal.h"
+#include "core/vec.h"
 
 enum { MAX_BOUNDARY_POINTS = 4096 };
-
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* d_world = Rᵀ d_camera */
 static void camera_to_world(const double r[9], const double d[3], double out[3]) {
@@ -271,7 +268,7 @@ static int map_normal_at(const cf_image *map, double u, double v, double n[3]) {
   double w[4] = {(1.0 - tx) * (1.0 - ty), tx * (1.0 - ty), (1.0 - tx) * ty, tx * ty};
   for (int c = 0; c < 4; ++c)
     for (int k = 0; k < 3; ++k) sum[k] += w[c] * corner[c][k];
-  double length = sqrt(dot3(sum, sum));
+  double length = cf_norm3(sum);
   if (!(length > 0.0)) return 0;
   for (int k = 0; k < 3; ++k) n[k] = sum[k] / length;
   return 1;
@@ -311,7 +308,7 @@ static surface_hit perspective_at(const cf_capture *capture, size_t k, double u,
   camera_to_world(view->r, ray_camera, d);
   double oc[3] = {view->c[0] - capture->center[0], view->c[1] - capture->center[1],
                   view->c[2] - capture->center[2]};
-  double b = dot3(d, oc), distance2 = dot3(oc, oc);
+  double b = cf_dot3(d, oc), distance2 = cf_dot3(oc, oc);
   double r2 = capture->radius * capture->radius;
   double discriminant = b * b - (distance2 - r2);
   if (discriminant < 0.0 || distance2 <= r2) return SURFACE_MISS;
@@ -369,20 +366,20 @@ void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int 
   double to_center[3], axis[3];
   for (int c = 0; c < 3; ++c) to_center[c] = capture->center[c] - view->c[c];
   world_to_camera(view->r, to_center, axis);
-  double distance = sqrt(dot3(axis, axis));
+  double distance = cf_norm3(axis);
   if (!(distance > capture->radius)) return; /* inside the sphere: keep everything */
   double sin_cone = capture->radius / distance, cos_cone = sqrt(1.0 - sin_cone * sin_cone);
   double a[3] = {axis[0] / distance, axis[1] / distance, axis[2] / distance};
   double e1[3] = {fabs(a[0]) < 0.9 ? 1.0 : 0.0, fabs(a[0]) < 0.9 ? 0.0 : 1.0, 0.0};
-  double da = dot3(e1, a);
+  double da = cf_dot3(e1, a);
   for (int c = 0; c < 3; ++c) e1[c] -= da * a[c];
-  double l1 = sqrt(dot3(e1, e1));
+  double l1 = cf_norm3(e1);
   for (int c = 0; c < 3; ++c) e1[c] /= l1;
   double e2[3] = {a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2],
                   a[0] * e1[1] - a[1] * e1[0]};
   double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
   for (int i = 0; i < 64; ++i) {
-    double phi = 2.0 * 3.14159265358979323846 * i / 64.0;
+    double phi = 2.0 * CF_PI * i / 64.0;
     double ray[3], uv[2];
     for (int c = 0; c < 3; ++c)
       ray[c] = cos_cone * a[c] + sin_cone * (cos(phi) * e1[c] + sin(phi) * e2[c]);

@@ -7,7 +7,7 @@
  * back-projection is the cone of rays tangent to the ball; the ball is put
  * at distance 1 on its axis with radius sin(half-angle) (a mirror ball's
  * directions do not depend on its scale), and the pixel's ray meets it. */
-#include "chrome_ball.h"
+#include "capture/chrome_ball.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -15,9 +15,7 @@
 #include <string.h>
 
 #include "core/order_statistics.h"
-
-#define PI 3.14159265358979323846
-#define DEG (180.0 / PI)
+#include "core/vec.h"
 #define CONE_SAMPLES 72 /* points of the outline back-projected */
 #define DIFF_STEP 0.01  /* px, central differences */
 #define BORDER_PX 1.0   /* an outline closer to the border is clipped */
@@ -51,27 +49,17 @@ void cf_chrome_default_options(cf_chrome_options *o) {
 
 /* ---- small vectors ---- */
 
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static int normalize3(double v[3]) {
-  double length = sqrt(dot3(v, v));
-  if (!(length > 0.0) || !isfinite(length)) return 0;
-  for (int k = 0; k < 3; ++k) v[k] /= length;
-  return 1;
-}
-
 /* v reflected about the unit normal n. */
 static void reflect(const double v[3], const double n[3], double out[3]) {
-  double vn = dot3(v, n);
+  double vn = cf_dot3(v, n);
   for (int k = 0; k < 3; ++k) out[k] = v[k] - 2.0 * vn * n[k];
 }
 
 /* The angle between two unit vectors, radians (stable near 0). */
 static double angle_between(const double a[3], const double b[3]) {
-  double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-  return atan2(sqrt(dot3(c, c)), dot3(a, b));
+  double c[3];
+  cf_cross3(a, b, c);
+  return atan2(sqrt(cf_dot3(c, c)), cf_dot3(a, b));
 }
 
 /* ---- the ball as seen ---- */
@@ -117,8 +105,8 @@ static int fit_cone(const cf_ellipse *e, const cf_camera *camera, ball *b) {
   int used = 0;
   for (int k = 0; k < CONE_SAMPLES; ++k) {
     double p[2], ray[3];
-    ellipse_point(e, 2.0 * PI * k / CONE_SAMPLES, p);
-    if (!cf_camera_unproject(camera, p, ray) || !normalize3(ray)) continue;
+    ellipse_point(e, 2.0 * CF_PI * k / CONE_SAMPLES, p);
+    if (!cf_camera_unproject(camera, p, ray) || !cf_normalize3(ray)) continue;
     for (int i = 0; i < 3; ++i) {
       rhs[i] += ray[i];
       for (int j = 0; j < 3; ++j) A[3 * i + j] += ray[i] * ray[j];
@@ -126,7 +114,7 @@ static int fit_cone(const cf_ellipse *e, const cf_camera *camera, ball *b) {
     ++used;
   }
   if (used < CONE_SAMPLES / 2 || !solve3(A, rhs, w)) return 0;
-  double length = sqrt(dot3(w, w));
+  double length = sqrt(cf_dot3(w, w));
   if (!(length > 1.0) || !isfinite(length)) return 0;
   for (int k = 0; k < 3; ++k) b->axis[k] = w[k] / length;
   b->cos_half = 1.0 / length;
@@ -159,13 +147,13 @@ static int ball_direction(const ball *b, double x, double y, double l[3], double
     return 1;
   }
   double uv[2] = {x, y}, u[3];
-  if (!cf_camera_unproject(b->camera, uv, u) || !normalize3(u)) return 0;
-  double along = dot3(u, b->axis);
+  if (!cf_camera_unproject(b->camera, uv, u) || !cf_normalize3(u)) return 0;
+  double along = cf_dot3(u, b->axis);
   double disc = along * along - b->cos_half * b->cos_half; /* |c|² − R² = cos² α */
   if (!(disc >= 0.0) || along <= 0.0) return 0;
   double t = along - sqrt(disc), n[3];
   for (int k = 0; k < 3; ++k) n[k] = (t * u[k] - b->axis[k]) / b->sin_half;
-  if (!normalize3(n)) return 0;
+  if (!cf_normalize3(n)) return 0;
   reflect(u, n, l);
   if (rho) *rho = b->half > 0.0 ? angle_between(u, b->axis) / b->half : 0.0;
   return 1;
@@ -182,7 +170,7 @@ int cf_chrome_direction(const cf_ellipse *outline, const cf_camera *camera, doub
 /* The largest angle (radians per px) that a unit move in the plane of two
  * derivatives (3-vectors) gives: the spectral norm of [d1 d2]. */
 static double worst_rate(const double d1[3], const double d2[3]) {
-  double a = dot3(d1, d1), b = dot3(d1, d2), c = dot3(d2, d2);
+  double a = cf_dot3(d1, d1), b = cf_dot3(d1, d2), c = cf_dot3(d2, d2);
   double mean = 0.5 * (a + c), gap = sqrt(0.25 * (a - c) * (a - c) + b * b);
   return sqrt(mean + gap);
 }
@@ -216,9 +204,9 @@ static void sensitivities(const cf_ellipse *outline, const ball *b, cf_chrome_li
   int ok[5];
   for (int k = 0; k < 5; ++k)
     ok[k] = derivative(outline, b, light->pixel[0], light->pixel[1], k, d[k]);
-  light->per_px_highlight_deg = ok[0] && ok[1] ? DEG * worst_rate(d[0], d[1]) : INFINITY;
-  light->per_px_center_deg = ok[2] && ok[3] ? DEG * worst_rate(d[2], d[3]) : INFINITY;
-  light->per_px_radius_deg = ok[4] ? DEG * sqrt(dot3(d[4], d[4])) : INFINITY;
+  light->per_px_highlight_deg = ok[0] && ok[1] ? CF_DEGREES * worst_rate(d[0], d[1]) : INFINITY;
+  light->per_px_center_deg = ok[2] && ok[3] ? CF_DEGREES * worst_rate(d[2], d[3]) : INFINITY;
+  light->per_px_radius_deg = ok[4] ? CF_DEGREES * cf_norm3(d[4]) : INFINITY;
 }
 
 /* ---- the outline ---- */
@@ -424,10 +412,10 @@ static cf_status blobs_to_lights(blob *blobs, size_t count, const cf_ellipse *ou
     double view[3] = {0.0, 0.0, b->camera ? -1.0 : 1.0}; /* toward the camera */
     if (b->camera) {
       double uv[2] = {L->pixel[0], L->pixel[1]};
-      if (cf_camera_unproject(b->camera, uv, view) && normalize3(view))
+      if (cf_camera_unproject(b->camera, uv, view) && cf_normalize3(view))
         for (int c = 0; c < 3; ++c) view[c] = -view[c];
     }
-    L->view_angle_deg = DEG * angle_between(L->direction, view);
+    L->view_angle_deg = CF_DEGREES * angle_between(L->direction, view);
     sensitivities(outline, b, L);
     if ((1.0 - B->rho_max) * r_px < RIM_PX || L->rho > RIM_RHO) L->warnings |= CF_CHROME_GRAZING;
     if ((double)B->area > EXTENDED_FRACTION * (double)result->ball_pixels)

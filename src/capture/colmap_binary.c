@@ -24,7 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 #include "clayfit/colmap.h"
 
 /* Record sizes without their variable parts, for the count checks. */

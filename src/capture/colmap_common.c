@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 
 cf_status cf__grow(void **array, size_t *capacity, size_t needed, size_t elem_size) {
   if (needed <= *capacity) return CF_OK;

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 #include "clayfit/colmap.h"
 #include "core/file.h"
 

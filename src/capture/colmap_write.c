@@ -10,7 +10,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "capture/colmap_internal.h"
+#include "colmap_internal.h"
 #include "clayfit/colmap.h"
 #include "core/file.h"
 

@@ -19,14 +19,13 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "core/vec.h"
 #include "envmap.h"
-
-#define PI 3.14159265358979323846
 #define MAX_LIGHTS CF_ENVMAP_MAX_LIGHTS
 
 void cf_envmap_direction(int width, int height, double x, double y, double d[3]) {
-  const double theta = PI * (y + 0.5) / height;
-  const double phi = 2.0 * PI * (x + 0.5) / width;
+  const double theta = CF_PI * (y + 0.5) / height;
+  const double phi = 2.0 * CF_PI * (x + 0.5) / width;
   d[0] = -sin(theta) * cos(phi);
   d[1] = cos(theta);
   d[2] = -sin(theta) * sin(phi);
@@ -69,15 +68,15 @@ static double rect_energy(const geometry *g, int x0, int y0, int x1, int y1) {
  * and sums Σ L dω per channel. */
 static void build(geometry *g, cf_envmap_report *report) {
   const int w = g->width, h = g->height;
-  const double d_theta = PI / h, d_phi = 2.0 * PI / w;
+  const double d_theta = CF_PI / h, d_phi = 2.0 * CF_PI / w;
   for (int y = 0; y < h; ++y) {
-    const double theta = PI * (y + 0.5) / h;
+    const double theta = CF_PI * (y + 0.5) / h;
     g->sin_theta[y] = sin(theta);
     g->cos_theta[y] = cos(theta);
     g->d_omega[y] = d_phi * d_theta * g->sin_theta[y];
   }
   for (int x = 0; x < w; ++x) {
-    const double phi = 2.0 * PI * (x + 0.5) / w;
+    const double phi = 2.0 * CF_PI * (x + 0.5) / w;
     g->cos_phi[x] = cos(phi);
     g->sin_phi[x] = sin(phi);
   }
@@ -110,9 +109,9 @@ static void build(geometry *g, cf_envmap_report *report) {
  * sphere (its width scaled by sin θ at its middle row) into r and *out. */
 static void split(const geometry *g, region *r, region *out) {
   const int w = r->x1 - r->x0, h = r->y1 - r->y0;
-  const double theta_mid = PI * 0.5 * (r->y0 + r->y1) / g->height;
-  const double width_on_sphere = w * (2.0 * PI / g->width) * sin(theta_mid);
-  const double height_on_sphere = h * (PI / g->height);
+  const double theta_mid = CF_PI * 0.5 * (r->y0 + r->y1) / g->height;
+  const double width_on_sphere = w * (2.0 * CF_PI / g->width) * sin(theta_mid);
+  const double height_on_sphere = h * (CF_PI / g->height);
   const int along_x = w >= 2 && (width_on_sphere >= height_on_sphere || h < 2);
   const int lo = along_x ? r->x0 : r->y0, hi = along_x ? r->x1 : r->y1;
 

@@ -1,4 +1,4 @@
-/* Light probes from chrome-ball photos (src/capture/light_probe.h): an
+/* Light probes from chrome-ball photos (src/capture/include/capture/light_probe.h): an
  * exposure-bracket merge after P. Debevec and J. Malik, "Recovering High
  * Dynamic Range Radiance Maps from Photographs", SIGGRAPH 1997 (eq. 6 and
  * its hat weight; the response is the declared transfer, not recovered),
@@ -8,10 +8,10 @@
 #include <stdlib.h>
 
 #include "core/order_statistics.h"
+#include "core/vec.h"
 #include "envmap.h"
-#include "light_probe.h"
+#include "capture/light_probe.h"
 
-#define PI 3.14159265358979323846
 #define MAX_BRACKETS CF_MAX_BRACKETS
 /* 8 × 8 reads a map pixel cover balls up to r = 16 H / π (1300 px at the
  * default 512 × 256) without skipping a photo pixel; larger balls alias. */
@@ -187,9 +187,9 @@ void cf_envmap_pixel(int width, int height, const double d[3], double *x, double
   /* cf_envmap_direction: d = (−sin θ cos φ, cos θ, −sin θ sin φ) */
   const double theta = acos(fmax(-1.0, fmin(1.0, d[1])));
   double phi = atan2(-d[2], -d[0]);
-  if (phi < 0.0) phi += 2.0 * PI;
-  *x = phi / (2.0 * PI) * width - 0.5;
-  *y = theta / PI * height - 0.5;
+  if (phi < 0.0) phi += 2.0 * CF_PI;
+  *x = phi / (2.0 * CF_PI) * width - 0.5;
+  *y = theta / CF_PI * height - 0.5;
 }
 
 typedef struct unwrap_ctx {
@@ -300,11 +300,12 @@ cf_status cf_probe_unwrap(const cf_image *photo, const cf_probe_ball *ball,
   s = cf_image_alloc(map, width, height, 4, err);
   if (s != CF_OK) return s;
   const unwrap_ctx u = {photo, ball, options, ball->radius - options->margin_px};
-  int ss = (int)ceil(PI * ball->radius / (2.0 * height));
+  int ss = (int)ceil(CF_PI * ball->radius / (2.0 * height));
   ss = ss < 1 ? 1 : ss > MAX_SUPERSAMPLE ? MAX_SUPERSAMPLE : ss;
   double invalid = 0.0, valid_pixels = 0.0;
   for (int y = 0; y < height; ++y) {
-    const double d_omega = (2.0 * PI / width) * (PI / height) * sin(PI * (y + 0.5) / height);
+    const double d_omega =
+        (2.0 * CF_PI / width) * (CF_PI / height) * sin(CF_PI * (y + 0.5) / height);
     for (int x = 0; x < width; ++x) {
       float *out = map->pixels + 4 * ((size_t)y * (size_t)width + (size_t)x);
       unwrap_pixel(&u, width, height, x, y, ss, out);
@@ -319,8 +320,8 @@ cf_status cf_probe_unwrap(const cf_image *photo, const cf_probe_ball *ball,
   }
   if (report) {
     const double sin_alpha = u.max_offset / ball->radius; /* α: normal's angle from v */
-    report->invalid_fraction = invalid / (4.0 * PI);
-    report->max_reflection_deg = 2.0 * asin(fmin(1.0, sin_alpha)) * 180.0 / PI;
+    report->invalid_fraction = invalid / (4.0 * CF_PI);
+    report->max_reflection_deg = 2.0 * asin(fmin(1.0, sin_alpha)) * 180.0 / CF_PI;
     report->supersample = ss;
   }
   return CF_OK;

@@ -1,5 +1,5 @@
 // The sphere's silhouette in one image: a thin adapter over OpenCV 4.6
-// (src/capture/sphere_silhouette.h). C linkage; no exception leaves it.
+// (src/capture/include/capture/sphere_silhouette.h). C linkage; no exception leaves it.
 //
 // Pixel convention. OpenCV puts the centre of pixel (col, row) at the
 // integer point (col, row); COLMAP (and cf_image) at (col + 0.5, row + 0.5).
@@ -52,14 +52,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "sphere_silhouette.h"
+#include "core/vec.h"
+#include "capture/sphere_silhouette.h"
 
 namespace {
 
 // OpenCV's pixel centres are at integers, COLMAP's at integer + 0.5.
 constexpr double kOpenCvToColmap = 0.5;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSearchSigma = 1.5;       // px, blur of the 8-bit rendition
 constexpr double kEdgeSigma = 1.0;         // px, blur of the linear grey
 constexpr double kGamma = 1.0 / 2.2;       // 8-bit rendition for the search only
@@ -133,11 +133,11 @@ Ellipse normalized(double cx, double cy, double a, double b, double angle) {
   e.cy = cy;
   if (b > a) {
     std::swap(a, b);
-    angle += 0.5 * kPi;
+    angle += 0.5 * CF_PI;
   }
-  angle = std::fmod(angle, kPi);
-  if (angle <= -0.5 * kPi) angle += kPi;
-  if (angle > 0.5 * kPi) angle -= kPi;
+  angle = std::fmod(angle, CF_PI);
+  if (angle <= -0.5 * CF_PI) angle += CF_PI;
+  if (angle > 0.5 * CF_PI) angle -= CF_PI;
   e.a = a;
   e.b = b;
   e.angle = angle;
@@ -152,7 +152,7 @@ Ellipse circle(double cx, double cy, double r) {
 // (degrees, from +x toward +y), size.height the other one.
 Ellipse from_rotated_rect(const cv::RotatedRect &box) {
   return normalized(box.center.x, box.center.y, 0.5 * box.size.width, 0.5 * box.size.height,
-                    box.angle * kPi / 180.0);
+                    box.angle * CF_PI / 180.0);
 }
 
 bool plausible(const Ellipse &e) {
@@ -195,7 +195,7 @@ void ellipse_normal(const Ellipse &e, double x, double y, double n[2]) {
 int direction_bin(const Ellipse &e, double x, double y, int bins) {
   double u, v;
   ellipse_frame(e, x, y, &u, &v);
-  double t = std::atan2(v, u) / (2.0 * kPi) + 0.5;  // [0, 1]
+  double t = std::atan2(v, u) / (2.0 * CF_PI) + 0.5;  // [0, 1]
   int k = static_cast<int>(t * bins);
   return std::min(std::max(k, 0), bins - 1);
 }
@@ -457,7 +457,7 @@ std::vector<std::vector<Candidate>> edge_candidates(const Renditions &r, const E
     ellipse_normal(e, p.x, p.y, n);
     double gx = r.gx(q.y, q.x), gy = r.gy(q.y, q.x);
     double along = gx * n[0] + gy * n[1];
-    if (std::fabs(along) < std::cos(30.0 * kPi / 180.0) * std::hypot(gx, gy)) continue;
+    if (std::fabs(along) < std::cos(30.0 * CF_PI / 180.0) * std::hypot(gx, gy)) continue;
     per_bin[static_cast<size_t>(direction_bin(e, p.x, p.y, bins))].push_back({p, res, along > 0});
   }
   return per_bin;
@@ -495,7 +495,7 @@ size_t outline_edge(const std::vector<Candidate> &bin, double band, double limb)
 // 1 px of it across the outline; within `band` of the ellipse, or for a dark
 // limb's outer edge up to the limb band beyond it.
 std::vector<EdgePoint> collect(const Renditions &r, const Ellipse &e, double band) {
-  int bins = std::max(32, static_cast<int>(kPi * (e.a + e.b) / 2.0));
+  int bins = std::max(32, static_cast<int>(CF_PI * (e.a + e.b) / 2.0));
   double limb = std::max(kLimbBandMin, kLimbBandOfRadius * 0.5 * (e.a + e.b));
   std::vector<EdgePoint> kept;
   for (const std::vector<Candidate> &bin : edge_candidates(r, e, band, limb, bins)) {
@@ -551,7 +551,7 @@ Fit robust_fit(const std::vector<EdgePoint> &pts, const Ellipse &guess, double b
   }
   std::vector<double> strengths;
   double sum2 = 0;
-  int bins = std::max(32, static_cast<int>(kPi * (current.a + current.b) / 2.0));
+  int bins = std::max(32, static_cast<int>(CF_PI * (current.a + current.b) / 2.0));
   std::vector<char> covered(static_cast<size_t>(bins), 0);
   inliers.clear();
   for (const EdgePoint &p : pts) {
@@ -577,7 +577,7 @@ Fit robust_fit(const std::vector<EdgePoint> &pts, const Ellipse &guess, double b
 // The fraction of the ellipse's direction bins with an edge point within
 // `band` of it.
 double coverage_of(const Renditions &r, const Ellipse &e, double band) {
-  int bins = std::max(32, static_cast<int>(kPi * (e.a + e.b) / 2.0));
+  int bins = std::max(32, static_cast<int>(CF_PI * (e.a + e.b) / 2.0));
   std::vector<char> covered(static_cast<size_t>(bins), 0);
   for (const EdgePoint &p : collect(r, e, band))
     covered[static_cast<size_t>(direction_bin(e, p.x, p.y, bins))] = 1;
@@ -611,7 +611,7 @@ Fit refine(const Renditions &r, const Ellipse &candidate, double wide) {
     sum += coverage_of(r, moved, fit.threshold);
     ++count;
   }
-  int bins = std::max(32, static_cast<int>(kPi * (fit.ellipse.a + fit.ellipse.b) / 2.0));
+  int bins = std::max(32, static_cast<int>(CF_PI * (fit.ellipse.a + fit.ellipse.b) / 2.0));
   fit.chance = std::min(std::max(count ? sum / count : 0.0, 1.0 / bins), 0.95);
   fit.significance =
       (fit.coverage - fit.chance) * std::sqrt(bins / (fit.chance * (1 - fit.chance)));
@@ -633,9 +633,9 @@ int support_reach(double rad) {
 // The fraction of directions around the circle with an edge pixel within
 // `reach` px of it (radially) whose gradient is within about 30° of radial.
 double support(const Renditions &r, double cx, double cy, double rad, int reach) {
-  int n = std::max(16, static_cast<int>(kPi * rad));  // a direction every 2 px
+  int n = std::max(16, static_cast<int>(CF_PI * rad));  // a direction every 2 px
   int hits = 0;
-  double step_c = std::cos(2 * kPi / n), step_s = std::sin(2 * kPi / n);
+  double step_c = std::cos(2 * CF_PI / n), step_s = std::sin(2 * CF_PI / n);
   double c = 1, s = 0;
   for (int i = 0; i < n; ++i) {
     if (i > 0) {  // rotate by 2π/n
@@ -682,7 +682,7 @@ std::vector<Ellipse> hough_candidates(const Renditions &r, const SearchRange &ra
   int min_r = std::max(2, static_cast<int>(std::floor(range.min_radius / f)));
   int max_r = std::max(min_r + 1, static_cast<int>(std::ceil(range.max_radius / f)));
   double dp = 2.0;
-  double votes = std::max(10.0, 0.25 * 2 * kPi * min_r / dp);
+  double votes = std::max(10.0, 0.25 * 2 * CF_PI * min_r / dp);
   std::vector<cv::Vec3f> circles;
   cv::HoughCircles(small, circles, cv::HOUGH_GRADIENT, dp, std::max(2.0, 0.5 * min_r), canny, votes,
                    min_r, max_r);
@@ -712,7 +712,7 @@ std::vector<Ellipse> hough_candidates(const Renditions &r, const SearchRange &ra
   double image_chance = median(supports);
   std::vector<std::pair<double, Ellipse>> ranked;
   for (const Scored &c : scored) {
-    double n = std::max(16.0, kPi * c.circle.a);
+    double n = std::max(16.0, CF_PI * c.circle.a);
     double chance = std::min(std::max({c.local_chance, image_chance, 0.02}), 0.95);
     double z = (c.support - chance) * std::sqrt(n / (chance * (1 - chance)));
     ranked.push_back({-z, c.circle});
@@ -832,7 +832,7 @@ cf_status from_image(const cf_image &image, const cf_silhouette_hint *hint, cons
     // the number of the outline's directions with edge points beyond
     // chance: the longest clean outline wins (the significance only tells
     // whether it is there at all; it saturates where clutter is rare)
-    int bins = std::max(32, static_cast<int>(kPi * (fit.ellipse.a + fit.ellipse.b) / 2.0));
+    int bins = std::max(32, static_cast<int>(CF_PI * (fit.ellipse.a + fit.ellipse.b) / 2.0));
     double score = (fit.coverage - fit.chance) * bins;
     cf_error why = {CF_OK, {0}};
     if (judge(fit, range, r.median_mag, name, &why) == CF_OK) {

@@ -1,5 +1,5 @@
 /* The sphere from its silhouettes in several views, and the normals of a
- * sphere seen orthographically (src/capture/sphere_silhouette.h).
+ * sphere seen orthographically (src/capture/include/capture/sphere_silhouette.h).
  *
  * Every silhouette ray of a view is tangent to the sphere, so the distance
  * from the sphere's centre C to the ray's line equals the radius R. The fit
@@ -13,9 +13,10 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "core/vec.h"
 #include "lsq/linalg.h"
 #include "lsq/lsq.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 /* A reciprocal condition number below this makes a matrix singular here. */
 #define RCOND_MIN 1e-12
@@ -37,20 +38,6 @@ int cf_sphere_normal_orthographic(const cf_ellipse *circle, double x, double y, 
 
 /* ---- small vectors ---- */
 
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double c[3]) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double norm3(const double a[3]) {
-  return sqrt(dot3(a, a));
-}
-
 /* λmin / λmax of a symmetric positive semi-definite n × n matrix (row-major,
  * n <= 4): 0 when λmax <= 0 or the matrix cannot be decomposed (not
  * finite). */
@@ -67,7 +54,7 @@ static double reciprocal_condition(int n, const double *m) {
 /* Ray i of a view as a unit vector; its length before normalising. */
 static double unit_ray(const cf_silhouette_view *view, size_t i, double d[3]) {
   const double *r = view->rays + 3 * i;
-  double len = norm3(r);
+  double len = cf_norm3(r);
   for (int k = 0; k < 3; ++k) d[k] = r[k] / len;
   return len;
 }
@@ -93,7 +80,7 @@ static cf_status check_views(const cf_silhouette_view *views, size_t num_views, 
       return cf_error_set(err, CF_EINVAL, "Silhouette view %zu has a non-finite camera centre.", v);
     for (size_t i = 0; i < view->count; ++i) {
       const double *r = view->rays + 3 * i;
-      double len = norm3(r);
+      double len = cf_norm3(r);
       if (!isfinite(r[0]) || !isfinite(r[1]) || !isfinite(r[2]) || !(len > 0.0) || !isfinite(len))
         return cf_error_set(err, CF_EINVAL,
                             "Silhouette view %zu, ray %zu is (%g, %g, %g): rays must be finite "
@@ -109,8 +96,8 @@ static cf_status check_views(const cf_silhouette_view *views, size_t num_views, 
     for (size_t i = 1; i < view->count; ++i) {
       double d[3], c[3];
       unit_ray(view, i, d);
-      cross3(first, d, c);
-      if (norm3(c) > spread) spread = norm3(c);
+      cf_cross3(first, d, c);
+      if (cf_norm3(c) > spread) spread = cf_norm3(c);
     }
     if (!(spread > 1e-9))
       return cf_error_set(err, CF_ENUMERIC,
@@ -158,9 +145,9 @@ static double view_share(const cf_silhouette_view *view, const double x[NUM_UNKN
   for (size_t i = 0; i < view->count; ++i) {
     double d[3];
     unit_ray(view, i, d);
-    double wd = dot3(w, d);
+    double wd = cf_dot3(w, d);
     double p[3] = {w[0] - wd * d[0], w[1] - wd * d[1], w[2] - wd * d[2]};
-    double distance = norm3(p);
+    double distance = cf_norm3(p);
     double r = distance - x[3];
     sum += r * r;
     if (!a) continue;
@@ -211,7 +198,7 @@ static void oriented_ray(const cf_silhouette_view *view, size_t i, double d[3]) 
   double d0[3];
   unit_ray(view, 0, d0);
   unit_ray(view, i, d);
-  if (dot3(d, d0) < 0.0)
+  if (cf_dot3(d, d0) < 0.0)
     for (int k = 0; k < 3; ++k) d[k] = -d[k];
 }
 
@@ -224,7 +211,7 @@ static double view_axis(const cf_silhouette_view *view, double axis[3]) {
     oriented_ray(view, i, d);
     for (int k = 0; k < 3; ++k) axis[k] += d[k];
   }
-  return norm3(axis);
+  return cf_norm3(axis);
 }
 
 /* The closed-form start: the point nearest to the central rays, and the
@@ -267,11 +254,11 @@ static cf_status closed_form_start(const cf_silhouette_view *views, size_t num_v
     for (size_t i = 0; i < view->count; ++i) {
       double d[3], c[3];
       oriented_ray(view, i, d);
-      cross3(axis, d, c);
-      angle_sum += atan2(norm3(c), dot3(axis, d));
+      cf_cross3(axis, d, c);
+      angle_sum += atan2(cf_norm3(c), cf_dot3(axis, d));
     }
     double w[3] = {x[0] - view->origin[0], x[1] - view->origin[1], x[2] - view->origin[2]};
-    radius_sum += norm3(w) * sin(angle_sum / (double)view->count);
+    radius_sum += cf_norm3(w) * sin(angle_sum / (double)view->count);
   }
   for (int k = 0; k < 3; ++k) center[k] = x[k];
   *radius = radius_sum / (double)num_views;
@@ -282,11 +269,12 @@ double cf_sphere_ray_error_px(const cf_silhouette_view *view, const double ray[3
                               const cf_sphere_fit *fit) {
   double w[3] = {fit->center[0] - view->origin[0], fit->center[1] - view->origin[1],
                  fit->center[2] - view->origin[2]};
-  double length = norm3(ray), d[3], c[3];
+  double length = cf_norm3(ray), d[3], c[3];
   for (int k = 0; k < 3; ++k) d[k] = ray[k] / length;
-  cross3(w, d, c);
-  double ray_angle = atan2(norm3(c), fabs(dot3(w, d))); /* a ray is a line: its sign is free */
-  double cone_angle = asin(fmin(1.0, fit->radius / norm3(w)));
+  cf_cross3(w, d, c);
+  double ray_angle =
+      atan2(cf_norm3(c), fabs(cf_dot3(w, d))); /* a ray is a line: its sign is free */
+  double cone_angle = asin(fmin(1.0, fit->radius / cf_norm3(w)));
   return fabs(ray_angle - cone_angle) * view->focal_px;
 }
 
@@ -300,7 +288,7 @@ static cf_status report_errors(const cf_silhouette_view *views, size_t num_views
     const cf_silhouette_view *view = &views[v];
     double w[3] = {fit->center[0] - view->origin[0], fit->center[1] - view->origin[1],
                    fit->center[2] - view->origin[2]};
-    if (!(norm3(w) > fit->radius))
+    if (!(cf_norm3(w) > fit->radius))
       return cf_error_set(err, CF_ENUMERIC,
                           "The fitted sphere (centre %g %g %g, radius %g) contains the camera of "
                           "silhouette view %zu, so it cannot be the sphere those views see.",

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "core/order_statistics.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 enum { MAX_ROUNDS = 20, MIN_RAYS = 5 };
 

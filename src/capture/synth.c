@@ -16,11 +16,11 @@
 #include "clayfit/image.h"
 #include "core/file.h"
 #include "core/json_reader.h"
+#include "core/parallel.h"
 #include "core/rng.h"
+#include "core/vec.h"
 #include "envmap.h"
 #include "synth_scene.h"
-
-#define SYNTH_PI 3.14159265358979323846
 
 /* The reference card (--reference): a square on the ground between the
  * sphere and camera 0 (azimuth 0), where that camera sees the ground in
@@ -96,8 +96,8 @@ static void matrix_to_quaternion(const double r[9], double q[4]) {
  * alternating), evenly spaced in azimuth, looking at the sphere's centre.
  * COLMAP's axes: x right, y down, z forward. */
 static void orbit_camera(const cf_synth_options *o, int k, synth_camera *cam) {
-  double azimuth = 2.0 * SYNTH_PI * k / o->images;
-  double elevation = (k % 2 ? 35.0 : 20.0) * SYNTH_PI / 180.0;
+  double azimuth = 2.0 * CF_PI * k / o->images;
+  double elevation = (k % 2 ? 35.0 : 20.0) * CF_PI / 180.0;
   double c[3] = {o->distance * cos(elevation) * cos(azimuth),
                  o->distance * cos(elevation) * sin(azimuth), o->distance * sin(elevation)};
   double forward[3] = {-c[0] / o->distance, -c[1] / o->distance, -c[2] / o->distance};
@@ -105,9 +105,8 @@ static void orbit_camera(const cf_synth_options *o, int k, synth_camera *cam) {
   double right[3] = {forward[1], -forward[0], 0.0};
   double length = sqrt(right[0] * right[0] + right[1] * right[1]);
   for (int i = 0; i < 3; ++i) right[i] /= length;
-  double down[3] = {forward[1] * right[2] - forward[2] * right[1],
-                    forward[2] * right[0] - forward[0] * right[2],
-                    forward[0] * right[1] - forward[1] * right[0]};
+  double down[3];
+  cf_cross3(forward, right, down);
   for (int i = 0; i < 3; ++i) {
     cam->r[i] = right[i];
     cam->r[3 + i] = down[i];
@@ -144,8 +143,9 @@ typedef struct render_job {
   double *exposures;   /* e_k per image (geometric mean 1) */
   cf_image_info *exif; /* per image with exif_exposures, else NULL */
   int card_region[4];  /* the reference card's pixels in image 0 */
+  /* over done, status, error and the progress */
   pthread_mutex_t lock;
-  int next, done;
+  int done;
   cf_status status;
   cf_error error;
 } render_job;
@@ -281,25 +281,25 @@ static cf_status write_photo(const render_job *job, int k, const char *path, con
   return cf_image_write(path, image, bits, err);
 }
 
-/* Rows first, first + step, ... of camera cam's image: radiance (3 per
- * pixel) and the sphere's coverage (1 per pixel). */
-typedef struct row_band {
+/* Camera cam's image in `parts` bands of interleaved rows: radiance (3
+ * per pixel) and the sphere's coverage (1 per pixel). */
+typedef struct row_bands {
   const render_job *job;
   const synth_scene *scene;
   const synth_camera *cam;
-  int first, step;
+  int parts;
   double *radiance, *covered;
-} row_band;
+} row_bands;
 
-static void *render_rows(void *arg) {
-  const row_band *b = arg;
+/* Rows part, part + parts, ... */
+static void render_rows(void *user, int part) {
+  const row_bands *b = user;
   const int w = b->job->options->width;
-  for (int y = b->first; y < b->job->options->height; y += b->step)
+  for (int y = part; y < b->job->options->height; y += b->parts)
     for (int x = 0; x < w; ++x) {
       size_t i = (size_t)y * (size_t)w + (size_t)x;
       render_pixel(b->job, b->scene, b->cam, x, y, b->radiance + 3 * i, b->covered + i);
     }
-  return NULL;
 }
 
 /* The radiance of every pixel: with fewer images than threads (one
@@ -307,17 +307,9 @@ static void *render_rows(void *arg) {
  * interleaved over the threads; else on this image's thread. */
 static void render_radiance(const render_job *job, const synth_scene *scene,
                             const synth_camera *cam, double *radiance, double *covered) {
-  row_band bands[SYNTH_THREADS];
-  pthread_t threads[SYNTH_THREADS];
   const int parts = job->options->images < SYNTH_THREADS ? SYNTH_THREADS : 1;
-  int started = 0;
-  for (int t = 0; t < parts; ++t)
-    bands[t] = (row_band){job, scene, cam, t, parts, radiance, covered};
-  for (int t = 1; t < parts; ++t, ++started)
-    if (pthread_create(&threads[t - 1], NULL, render_rows, &bands[t]) != 0) break;
-  render_rows(&bands[0]);
-  for (int t = 0; t < started; ++t) pthread_join(threads[t], NULL);
-  for (int t = started + 1; t < parts; ++t) render_rows(&bands[t]); /* not started */
+  row_bands bands = {job, scene, cam, parts, radiance, covered};
+  cf_parallel_for(parts, parts, render_rows, &bands);
 }
 
 static cf_status render_image(render_job *job, int k, cf_error *err) {
@@ -356,26 +348,25 @@ static cf_status render_image(render_job *job, int k, cf_error *err) {
   return s;
 }
 
-static void *render_worker(void *arg) {
-  render_job *job = arg;
-  for (;;) {
-    pthread_mutex_lock(&job->lock);
-    int k = job->status == CF_OK && job->next < job->options->images ? job->next++ : -1;
-    pthread_mutex_unlock(&job->lock);
-    if (k < 0) return NULL;
-    cf_error err = {0};
-    cf_status s = render_image(job, k, &err);
-    pthread_mutex_lock(&job->lock);
-    if (s != CF_OK && job->status == CF_OK) {
-      job->status = s;
-      job->error = err;
-    }
-    ++job->done;
-    if (job->options->progress)
-      job->options->progress(job->options->progress_user, "rendering images", (size_t)job->done,
-                             (size_t)job->options->images);
-    pthread_mutex_unlock(&job->lock);
+/* Image k, unless an image has failed (the first failure is kept). */
+static void render_one(void *user, int k) {
+  render_job *job = user;
+  pthread_mutex_lock(&job->lock);
+  const int failed = job->status != CF_OK;
+  pthread_mutex_unlock(&job->lock);
+  if (failed) return;
+  cf_error err = {0};
+  cf_status s = render_image(job, k, &err);
+  pthread_mutex_lock(&job->lock);
+  if (s != CF_OK && job->status == CF_OK) {
+    job->status = s;
+    job->error = err;
   }
+  ++job->done;
+  if (job->options->progress)
+    job->options->progress(job->options->progress_user, "rendering images", (size_t)job->done,
+                           (size_t)job->options->images);
+  pthread_mutex_unlock(&job->lock);
 }
 
 /* ---- the files around the images ---- */
@@ -708,7 +699,7 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
   /* a white Lambert surface facing the flash at the orbit's distance has
    * radiance 0.5: I/(π D²) = 0.5 */
   job.intensity =
-      o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * SYNTH_PI * o->distance * o->distance;
+      o->flash_intensity > 0.0 ? o->flash_intensity : 0.5 * CF_PI * o->distance * o->distance;
   job.response = synth_response(o);
   job.cameras = calloc((size_t)o->images, sizeof *job.cameras);
   job.exposures = calloc((size_t)o->images, sizeof *job.exposures);
@@ -732,12 +723,7 @@ cf_status cf_synth_write(const char *dir, const cf_synth_options *o, cf_error *e
     return s;
   }
   pthread_mutex_init(&job.lock, NULL);
-  pthread_t threads[SYNTH_THREADS];
-  int started = 0;
-  for (; started < SYNTH_THREADS; ++started)
-    if (pthread_create(&threads[started], NULL, render_worker, &job) != 0) break;
-  if (started == 0) render_worker(&job);
-  for (int i = 0; i < started; ++i) pthread_join(threads[i], NULL);
+  cf_parallel_for(o->images, SYNTH_THREADS, render_one, &job);
   pthread_mutex_destroy(&job.lock);
   s = job.status;
   if (s != CF_OK && err) *err = job.error;

@@ -5,15 +5,13 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/vec.h"
+
 static const double ground_z = SYNTH_GROUND_Z;
 static const double backdrop_radius = 6.0, backdrop_top = 5.0;
 
-static double dot3(const double a[3], const double b[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 double synth_hit_sphere(const double origin[3], const double d[3]) {
-  double b = dot3(d, origin), c = dot3(origin, origin) - 1.0;
+  double b = cf_dot3(d, origin), c = cf_dot3(origin, origin) - 1.0;
   double discriminant = b * b - c;
   if (discriminant < 0.0 || c <= 0.0) return -1.0;
   return -b - sqrt(discriminant);
@@ -73,7 +71,7 @@ int synth_in_shadow(const double x[3], const cf_light *light) {
   double t = synth_hit_sphere(x, l);
   if (light->kind == CF_LIGHT_DIRECTIONAL) return t > 1e-9;
   double d[3] = {light->position[0] - x[0], light->position[1] - x[1], light->position[2] - x[2]};
-  return t > 1e-9 && t < sqrt(dot3(d, d));
+  return t > 1e-9 && t < cf_norm3(d);
 }
 
 /* Lambertian radiance at x with normal n and albedo, every light with the
@@ -84,11 +82,11 @@ static void lambert(const synth_scene *scene, const double x[3], const double n[
   for (int j = 0; j < scene->light_count; ++j) {
     double l[3], e[3];
     if (!cf_light_at(&scene->lights[j], NULL, NULL, x, l, e)) continue;
-    double cos_i = dot3(l, n);
+    double cos_i = cf_dot3(l, n);
     if (!(cos_i > 0.0) || synth_in_shadow(x, &scene->lights[j])) continue;
     for (int c = 0; c < 3; ++c) irradiance[c] += e[c] * cos_i;
   }
-  for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / 3.14159265358979323846 * irradiance[c];
+  for (int c = 0; c < 3; ++c) radiance[c] = albedo[c] / CF_PI * irradiance[c];
 }
 
 /* docs/model.md (5) summed over the lights: L = Σ_j f(n, l_j, v) E_j (n·l_j)+,
@@ -122,7 +120,7 @@ static void shade_sphere(const synth_scene *scene, const double x[3], const doub
   for (int j = 0; j < scene->light_count; ++j) {
     double *l = b.l + 3 * b.count, *e = b.e + 3 * b.count;
     if (!cf_light_at(&scene->lights[j], NULL, NULL, x, l, e)) continue;
-    double cos_i = dot3(n, l);
+    double cos_i = cf_dot3(n, l);
     if (!(cos_i > 0.0)) continue;
     memcpy(b.n + 3 * b.count, n, 3 * sizeof *n);
     memcpy(b.v + 3 * b.count, v, 3 * sizeof *v);

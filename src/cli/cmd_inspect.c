@@ -7,10 +7,9 @@
 #include "clayfit/capture.h"
 #include "cli.h"
 #include "core/file.h"
+#include "core/vec.h"
 #include "json_out.h"
 #include "out_path.h"
-
-#define DEGREES (180.0 / 3.14159265358979323846)
 
 static void inspect_usage(FILE *out) {
   fprintf(out,
@@ -60,7 +59,7 @@ static json_t *sphere_json(const cf_capture_summary *sum) {
         json_pack("{s:o, s:f, s:o, s:f, s:s}", "center_px", json_doubles(sum->circle_center_px, 2),
                   "radius_px", 0.5 * (sum->circle_axes_px[0] + sum->circle_axes_px[1]),
                   "semi_axes_px", json_doubles(sum->circle_axes_px, 2), "angle_deg",
-                  sum->circle_angle * DEGREES, "fitted_to", sum->circle_source));
+                  sum->circle_angle * CF_DEGREES, "fitted_to", sum->circle_source));
   return sphere;
 }
 
@@ -113,7 +112,7 @@ static void print_summary(const cf_capture *capture, const cf_capture_summary *s
         "position or size",
         sum->geometry, sum->circle_source, sum->circle_center_px[0], sum->circle_center_px[1],
         0.5 * (sum->circle_axes_px[0] + sum->circle_axes_px[1]), sum->circle_axes_px[0],
-        sum->circle_axes_px[1], sum->circle_angle * DEGREES);
+        sum->circle_axes_px[1], sum->circle_angle * CF_DEGREES);
   else if (sum->sphere_radius > 0.0)
     printf("sphere (%s): centre %.6g %.6g %.6g, radius %.6g world units", sum->geometry,
            sum->sphere_center[0], sum->sphere_center[1], sum->sphere_center[2], sum->sphere_radius);

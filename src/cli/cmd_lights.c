@@ -11,6 +11,7 @@
 #include "cli.h"
 #include "core/file.h"
 #include "core/json_reader.h"
+#include "core/vec.h"
 #include "json_out.h"
 #include "out_path.h"
 
@@ -300,7 +301,7 @@ static json_t *outline_json(const cf_ellipse *e, const char *fitted_to) {
   double center[2] = {e->cx, e->cy}, axes[2] = {e->a, e->b};
   return json_pack("{s:o, s:f, s:o, s:f, s:o}", "center_px", json_doubles(center, 2), "radius_px",
                    0.5 * (e->a + e->b), "semi_axes_px", json_doubles(axes, 2), "angle_deg",
-                   e->angle * 180.0 / 3.14159265358979323846, "fitted_to", json_text(fitted_to));
+                   e->angle * 180.0 / CF_PI, "fitted_to", json_text(fitted_to));
 }
 
 /* The capture's light entries for the files written. */

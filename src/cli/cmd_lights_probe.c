@@ -1,6 +1,6 @@
 /* clayfit lights --probe: a light probe from one HDR photo of a chrome ball,
  * or from exposure brackets of it, unwrapped into the equirectangular map a
- * capture's `environment` light reads (src/capture/light_probe.h,
+ * capture's `environment` light reads (src/capture/include/capture/light_probe.h,
  * docs/lights.md "Light probe"). cmd_lights.c hands over when it sees
  * --probe. */
 #include <errno.h>

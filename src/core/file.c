@@ -1,4 +1,4 @@
-/* Whole-file reading and path handling (src/core/file.h). */
+/* Whole-file reading and path handling (src/core/include/core/file.h). */
 #define _XOPEN_SOURCE 700 /* POSIX 2008 with realpath (XSI) */
 #include "core/file.h"
 

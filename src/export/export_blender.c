@@ -127,7 +127,7 @@ static void specular_inputs(const export_material *m, preset_notes *n, blender_i
  * F_x = (1 - c_x)^5, RR = roughness (1 + l.v). */
 static double burley_diffuse(double r, double ci, double co, double lv) {
   double fl = pow(1.0 - ci, 5.0), fv = pow(1.0 - co, 5.0), rr = r * (1.0 + lv);
-  return ((1.0 - 0.5 * fl) * (1.0 - 0.5 * fv) + rr * (fl + fv + fl * fv * (rr - 1.0))) / EXPORT_PI;
+  return ((1.0 - 0.5 * fl) * (1.0 - 0.5 * fv) + rr * (fl + fv + fl * fv * (rr - 1.0))) / CF_PI;
 }
 
 enum { V1_ROUGHNESS_STEPS = 20 };

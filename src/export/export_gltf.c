@@ -57,9 +57,9 @@ static int make_sphere(sphere_mesh *s) {
   for (int c = 0; c < 3; ++c) s->min[c] = 1e30f, s->max[c] = -1e30f;
   size_t v = 0;
   for (int i = 0; i <= SPHERE_RINGS; ++i) {
-    double theta = EXPORT_PI * i / SPHERE_RINGS;
+    double theta = CF_PI * i / SPHERE_RINGS;
     for (int j = 0; j <= SPHERE_SEGMENTS; ++j, ++v) {
-      double phi = 2.0 * EXPORT_PI * j / SPHERE_SEGMENTS;
+      double phi = 2.0 * CF_PI * j / SPHERE_SEGMENTS;
       double p[3] = {sin(theta) * sin(phi), cos(theta), sin(theta) * cos(phi)};
       double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
       for (int c = 0; c < 3; ++c) {
@@ -121,8 +121,7 @@ static double gltf_basis(const void *ctx, int variant, const double l[3], const 
   double h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
   double len = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
   double vh = len > 0.0 ? (v[0] * h[0] + v[1] * h[1] + v[2] * h[2]) / len : 1.0;
-  return (1.0 - schlick(g->f0, g->f90, vh)) * (1.0 - g->coat * schlick(0.04, 1.0, v[2])) /
-         EXPORT_PI;
+  return (1.0 - schlick(g->f0, g->f90, vh)) * (1.0 - g->coat * schlick(0.04, 1.0, v[2])) / CF_PI;
 }
 
 /* baseColorFactor: the colour of glTF's diffuse closest to the model's

@@ -1,5 +1,5 @@
 /* What the export formats share: the physics of the mapping
- * (export_mapping.c), and, from the layer below (src/shader/preset_text.h),
+ * (export_mapping.c), and, from the layer below (src/shader/include/shader/preset_text.h),
  * the text, the notes and the provenance of every material file. Private to
  * src/export. */
 #ifndef CLAYFIT_EXPORT_INTERNAL_H
@@ -10,9 +10,8 @@
 #include "clayfit/export.h"
 #include "clayfit/tailed_ggx.h"
 #include "core/text_escape.h"
+#include "core/vec.h"
 #include "shader/preset_text.h"
-
-#define EXPORT_PI 3.14159265358979323846
 
 /* ---- the physics ---- */
 /* η = (1 + √F0)/(1 − √F0) (docs/model.md (7)) and back. */

@@ -22,7 +22,7 @@ double export_f0_from_ior(double ior) {
 }
 
 double export_sigma_materialx_glsl(double sigma) {
-  return sigma / EXPORT_PI;
+  return sigma / CF_PI;
 }
 
 double export_sigma_fujii(double sigma) {
@@ -204,7 +204,7 @@ static cf_status diffuse_accumulate(const cf_fit_file *fit, export_diffuse_basis
     for (int b = 0; b < Q; ++b) {
       double ci = x[b], si = sqrt(1.0 - ci * ci);
       for (int c = 0; c < Q; ++c) {
-        double phi = EXPORT_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
+        double phi = CF_PI * x[c], l[3] = {si * cos(phi), si * sin(phi), ci};
         double weight = co * w[a] * w[b] * w[c], f[3], lobes[3];
         cf_status st = cf_eval(model, fit->result.params, n, l, v, f, NULL);
         if (st == CF_OK) st = cf_eval(model, lobe_params, n, l, v, lobes, NULL);
@@ -273,7 +273,7 @@ static double coat_schlick(double c) {
 static double coat_ggx(double r, double ci, double co, double ch, double vh) {
   double a2 = r * r * r * r, d = ch * ch * (a2 - 1.0) + 1.0;
   double gv = ci * sqrt(co * co * (1.0 - a2) + a2), gl = co * sqrt(ci * ci * (1.0 - a2) + a2);
-  return coat_schlick(vh) * a2 / (EXPORT_PI * d * d) * 0.5 / (gv + gl);
+  return coat_schlick(vh) * a2 / (CF_PI * d * d) * 0.5 / (gv + gl);
 }
 
 static double coat_roughness(int k) {
@@ -300,18 +300,18 @@ cf_status export_coat_ggx_fit(const cf_fit_file *fit, double *weight, double *ro
   for (int a = 0; a < COAT_VIEWS; ++a) {
     double co = xv[a], v[3] = {sqrt(1.0 - co * co), 0.0, co};
     for (int b = 0; b < COAT_THETAS; ++b) {
-      double q = 0.5 * EXPORT_PI * xt[b], tq = tan(q);
+      double q = 0.5 * CF_PI * xt[b], tq = tan(q);
       double th = atan(COAT_THETA_SCALE * tq);
-      double dth = COAT_THETA_SCALE * 0.5 * EXPORT_PI / (cos(q) * cos(q)) /
+      double dth = COAT_THETA_SCALE * 0.5 * CF_PI / (cos(q) * cos(q)) /
                    (1.0 + COAT_THETA_SCALE * COAT_THETA_SCALE * tq * tq);
       for (int c = 0; c < COAT_PHIS; ++c) {
-        double phi = EXPORT_PI * xp[c]; /* [0, π]: the lobe is even in φ_h */
+        double phi = CF_PI * xp[c]; /* [0, π]: the lobe is even in φ_h */
         double h[3] = {sin(th) * cos(phi), sin(th) * sin(phi), cos(th)};
         double vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
         double l[3] = {2.0 * vh * h[0] - v[0], 2.0 * vh * h[1] - v[1], 2.0 * vh * h[2] - v[2]};
         if (vh <= 0.0 || l[2] <= 1e-9) continue;
         double ci = l[2], f[3], base[3];
-        double w = co * wv[a] * wt[b] * dth * sin(th) * EXPORT_PI * wp[c] * 4.0 * vh;
+        double w = co * wv[a] * wt[b] * dth * sin(th) * CF_PI * wp[c] * 4.0 * vh;
         cf_status s = cf_eval(fit->result.model, fit->result.params, n, l, v, f, NULL);
         if (s == CF_OK) s = cf_eval(fit->result.model, no_coat, n, l, v, base, NULL);
         if (s != CF_OK)

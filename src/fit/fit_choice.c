@@ -18,7 +18,7 @@
 #include "fit_problem.h"
 #include "fit_residuals.h"
 #include "fit_run.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 
 /* The sample (every stride-th observation, at most CF_FIT_CHOICE_SAMPLE)
  * split into a training and a held-out part; `heldout` says how. */

@@ -20,7 +20,7 @@
 #include "core/rng.h"
 #include "fit_plan.h"
 #include "fit_sample.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 
 int fit_jpeg_modelled(const cf_capture *capture) {
   for (size_t k = 0; k < cf_capture_image_count(capture); ++k)

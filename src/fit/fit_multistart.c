@@ -9,7 +9,7 @@
 #include "fit_residuals.h"
 #include "fit_sample.h"
 #include "fit_starts.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 
 /* Every start runs to convergence (START_ITERATIONS at most) on a
  * subsample of about SUBSAMPLE_TARGET observations spread over the

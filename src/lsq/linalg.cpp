@@ -1,6 +1,6 @@
 // Dense symmetric linear algebra by Eigen (linalg.h). No exception crosses
 // the C boundary.
-#include "linalg.h"
+#include "lsq/linalg.h"
 
 #include <Eigen/Dense>
 

@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "lsq.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "lsq/lsq.h"
 
 namespace lsq {
 

@@ -13,7 +13,7 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "lsq_blocks.h"
 
 namespace lsq {

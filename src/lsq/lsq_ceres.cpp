@@ -15,7 +15,7 @@
 #include <new>
 #include <vector>
 
-#include "lsq.h"
+#include "lsq/lsq.h"
 #include "lsq_blocks.h"
 #include "lsq_bounds.h"
 #include "lsq_line_search.h"

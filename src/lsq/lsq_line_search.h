@@ -14,7 +14,7 @@
 
 #include <vector>
 
-#include "lsq.h"
+#include "lsq/lsq.h"
 
 namespace lsq {
 

@@ -8,9 +8,7 @@
 #include <math.h>
 
 #include "clayfit/model.h"
-
-#define CF_PI 3.14159265358979323846
-#define CF_INV_PI 0.31830988618379067154
+#include "core/vec.h" /* CF_PI, CF_INV_PI */
 
 /* The models' per-observation bodies are written once with an optional
  * gradient and must be inlined into their value-only and value+gradient

@@ -7,19 +7,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/vec.h"
 #include "report_internal.h"
-
-#define DEGREES (180.0 / 3.14159265358979323846)
-
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* Degrees between the normal and the nearest half vector of a lit light
  * (NaN where no light reaches the observation). */
 static double half_angle(const cf_observations *o, size_t i) {
   double best = cf_observation_specularity(o, i);
-  return best < -0.5 ? NAN : acos(fmin(1.0, best)) * DEGREES;
+  return best < -0.5 ? NAN : acos(fmin(1.0, best)) * CF_DEGREES;
 }
 
 /* Is the capture the one the fit was made on? Its image count, its
@@ -123,7 +118,8 @@ static cf_status residuals(report_data *d, cf_error *err) {
     d->residual[i] = used ? (float)(total / sqrt((double)used)) : NAN;
     d->half_angle[i] = (float)half_angle(o, i);
     d->view_angle[i] =
-        (float)(acos(fmax(-1.0, fmin(1.0, dot3(o->normal + 3 * i, o->view + 3 * i)))) * DEGREES);
+        (float)(acos(fmax(-1.0, fmin(1.0, cf_dot3(o->normal + 3 * i, o->view + 3 * i)))) *
+                CF_DEGREES);
     uint32_t im = o->image[i];
     ++d->observations[im];
     d->censored[im] += (d->mark[i] & REPORT_CENSORED) != 0;

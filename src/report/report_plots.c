@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/vec.h"
 #include "report_internal.h"
 #include "svg.h"
 
@@ -75,7 +76,7 @@ static cf_status histogram_plot(const report_data *d, const char *dir, cf_error 
   for (int b = 0; b < HISTOGRAM_BINS; ++b) x[b] = lo + b * w, peak = fmax(peak, y[b]);
   for (int i = 0; i <= 160; ++i) { /* the noise alone: N(0, 1) */
     gx[i] = lo + (hi - lo) * i / 160.0;
-    gy[i] = total * w * exp(-0.5 * gx[i] * gx[i]) / sqrt(2.0 * 3.14159265358979323846);
+    gy[i] = total * w * exp(-0.5 * gx[i] * gx[i]) / sqrt(2.0 * CF_PI);
     peak = fmax(peak, gy[i]);
   }
   svg_plot plot = {0};
@@ -97,7 +98,7 @@ static cf_status lobe_plot(const report_data *d, const char *dir, cf_error *err)
   enum { N = 179 };
   static const double light_deg[3] = {0.0, 30.0, 60.0};
   static const char *const colours[3] = {"#1040c0", "#10a040", "#c02020"};
-  const double deg = 3.14159265358979323846 / 180.0, n[3] = {0.0, 0.0, 1.0};
+  const double deg = CF_PI / 180.0, n[3] = {0.0, 0.0, 1.0};
   double f[3][N], lo = INFINITY, hi = 0.0;
   for (int a = 0; a < 3; ++a)
     for (int i = 0; i < N; ++i) {

@@ -14,22 +14,12 @@
 #include "clayfit/shader.h"
 #include "clayfit/thumbnail.h"
 #include "core/file.h"
+#include "core/vec.h"
 #include "report_internal.h"
 
 /* three.js' bundle and the converted module are read whole: a bound on
  * what is copied (three.js 0.187 minified with the viewer: 0.7 MB). */
 #define VIEWER_MAX_FILE (64u << 20)
-
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static int normalize3(double *a) {
-  double len = sqrt(dot3(a, a));
-  if (!(len > 0.0) || !isfinite(len)) return 0;
-  for (int c = 0; c < 3; ++c) a[c] /= len;
-  return 1;
-}
 
 /* The image the view is taken from: the one with the most observations. */
 static size_t view_image(const report_data *d) {
@@ -49,7 +39,7 @@ static int camera_frame(const report_data *d, size_t k, double frame[3][3], size
   double best = -2.0, mean_x = 0.0, count = 0.0;
   for (size_t i = d->first[k]; i < d->last[k]; ++i) {
     if (o->image[i] != k) continue;
-    double c = dot3(o->normal + 3 * i, o->view + 3 * i);
+    double c = cf_dot3(o->normal + 3 * i, o->view + 3 * i);
     if (c > best) best = c, *front = i;
     mean_x += o->pixel[2 * i], count += 1.0;
   }
@@ -60,12 +50,12 @@ static int camera_frame(const report_data *d, size_t k, double frame[3][3], size
     if (o->image[i] == k)
       for (int c = 0; c < 3; ++c) gx[c] += (o->pixel[2 * i] - mean_x) * o->normal[3 * i + c];
   memcpy(frame[2], o->view + 3 * *front, sizeof frame[2]);
-  double along = dot3(gx, frame[2]);
+  double along = cf_dot3(gx, frame[2]);
   for (int c = 0; c < 3; ++c) frame[0][c] = gx[c] - along * frame[2][c];
   frame[1][0] = frame[2][1] * frame[0][2] - frame[2][2] * frame[0][1];
   frame[1][1] = frame[2][2] * frame[0][0] - frame[2][0] * frame[0][2];
   frame[1][2] = frame[2][0] * frame[0][1] - frame[2][1] * frame[0][0];
-  return normalize3(frame[0]) && normalize3(frame[1]) && normalize3(frame[2]);
+  return cf_normalize3(frame[0]) && cf_normalize3(frame[1]) && cf_normalize3(frame[2]);
 }
 
 /* The lights at the observation facing the camera, as directional lights
@@ -94,7 +84,7 @@ static void front_lights(const report_data *d, size_t i, double frame[3][3], rep
     }
     if (at >= CF_SPHERE_MAX_LIGHTS) continue;
     for (int c = 0; c < 3; ++c) {
-      v->direction[3 * at + c] = dot3(l, frame[c]);
+      v->direction[3 * at + c] = cf_dot3(l, frame[c]);
       v->irradiance[3 * at + c] = e[c];
     }
   }

@@ -10,14 +10,14 @@
 #include <string.h>
 #include <unistd.h>
 
-#define PI 3.14159265358979323846
+#include "core/vec.h"
 
 /* The standard light (thumbnail.h): the key (−4, 4, 7)/9 at 0.8π, so that
  * an albedo-1 Lambertian surface facing it gives (1/π)(0.8π) = 0.8; the
  * fill (6, −2, 3)/7 at a quarter of that. */
 static const cf_sphere_light standard_lights[CF_SPHERE_LIGHT_COUNT] = {
-    {{-4.0 / 9.0, 4.0 / 9.0, 7.0 / 9.0}, 0.8 * PI},
-    {{6.0 / 7.0, -2.0 / 7.0, 3.0 / 7.0}, 0.2 * PI},
+    {{-4.0 / 9.0, 4.0 / 9.0, 7.0 / 9.0}, 0.8 * CF_PI},
+    {{6.0 / 7.0, -2.0 / 7.0, 3.0 / 7.0}, 0.2 * CF_PI},
 };
 
 static const double view_dir[3] = {0.0, 0.0, 1.0};

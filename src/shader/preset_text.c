@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "core/file.h"
-#include "preset_text.h"
+#include "shader/preset_text.h"
 
 /* ---- text ---- */
 

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "core/vec.h"
 #include "shader_internal.h"
 
 static const char glsl_prelude[] =
@@ -19,12 +20,13 @@ static const char glsl_prelude[] =
 
 static const char hlsl_prelude[] = "// HLSL prelude: the shared body is HLSL's types already\n";
 
+static const char shared_begin[] =
+    "// ---- clayfit shared body: begin (docs/model.md; generated, do not edit)\n";
+
 /* The one source of the maths, a line a string (C99 caps a literal at 4095
- * characters). Equation numbers are docs/model.md's. */
+ * characters), after shared_begin and the constants (the C ones, every
+ * digit printed). Equation numbers are docs/model.md's. */
 static const char *const shared_body[] = {
-    "// ---- clayfit shared body: begin (docs/model.md; generated, do not edit)\n",
-    "#define CF_PI 3.14159265358979\n",
-    "#define CF_INV_PI 0.318309886183791\n",
     "\n",
     "// the fitted parameters (docs/model.md §1.5); a rung reads its own\n",
     "struct cf_params {\n",
@@ -386,6 +388,8 @@ void shader_material_read(const cf_fit_file *fit, shader_material *m) {
 void shader_library(preset_text *t, shader_lang lang, const shader_material *m) {
   preset_printf(t, "#define CLAYFIT_MODEL %d\n#define CLAYFIT_TAILED %d\n", m->rung, m->tailed);
   preset_printf(t, "%s", lang == SHADER_GLSL ? glsl_prelude : hlsl_prelude);
+  preset_printf(t, "%s#define CF_PI %.17g\n#define CF_INV_PI %.17g\n", shared_begin, CF_PI,
+                CF_INV_PI);
   for (size_t i = 0; i < sizeof shared_body / sizeof shared_body[0]; ++i)
     preset_printf(t, "%s", shared_body[i]);
 }

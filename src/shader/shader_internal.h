@@ -7,7 +7,7 @@
 #define CLAYFIT_SHADER_INTERNAL_H
 
 #include "clayfit/shader.h"
-#include "preset_text.h"
+#include "shader/preset_text.h"
 
 typedef enum shader_lang { SHADER_GLSL, SHADER_HLSL } shader_lang;
 

@@ -1,4 +1,4 @@
-/* Chrome balls rendered for the tests of src/capture/chrome_ball.h: a
+/* Chrome balls rendered for the tests of src/capture/include/capture/chrome_ball.h: a
  * mirror sphere reflecting small bright discs (distant lights, 2° across,
  * 4 times the clip level) in a dim sky, orthographic or through a pinhole
  * camera, 4 x 4 samples a pixel, stored as 8-bit values. */

@@ -1,4 +1,4 @@
-# Light probes from a chrome ball (src/capture/light_probe.h, docs/lights.md
+# Light probes from a chrome ball (src/capture/include/capture/light_probe.h, docs/lights.md
 # "Light probe"): balls rendered in the real HDRIs, unwrapped and compared
 # by their irradiance's spherical harmonics; 8-bit brackets merged back.
 # It also writes the fixture of the `clayfit lights --probe` tests.

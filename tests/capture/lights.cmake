@@ -1,4 +1,4 @@
-# clayfit lights: light directions from a chrome ball (src/capture/chrome_ball.h,
+# clayfit lights: light directions from a chrome ball (src/capture/include/capture/chrome_ball.h,
 # src/cli/cmd_lights.c; docs/lights.md).
 clayfit_c_test(test_chrome_ball SOURCES capture/test_chrome_ball.c capture/chrome_render.c
                LIBS clayfit_capture m LABELS capture)

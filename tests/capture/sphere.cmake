@@ -1,4 +1,4 @@
-# tests of the sphere component (src/capture/sphere_silhouette.h)
+# tests of the sphere component (src/capture/include/capture/sphere_silhouette.h)
 clayfit_c_test(test_sphere_fit SOURCES capture/test_sphere_fit.c
                LIBS clayfit_sphere m LABELS capture)
 clayfit_c_test(test_sphere_detect SOURCES capture/test_sphere_detect.c

@@ -1,4 +1,4 @@
-/* Light directions from a chrome ball (src/capture/chrome_ball.h) on balls
+/* Light directions from a chrome ball (src/capture/include/capture/chrome_ball.h) on balls
  * rendered by chrome_render.c: a mirror sphere reflecting small bright
  * discs (distant lights, 2° across, 4 times the clip level) in a dim sky,
  * orthographic and through a pinhole, 4 × 4 samples a pixel, stored as

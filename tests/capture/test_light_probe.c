@@ -1,4 +1,4 @@
-/* Light probes (src/capture/light_probe.h). A chrome ball is rendered in
+/* Light probes (src/capture/include/capture/light_probe.h). A chrome ball is rendered in
  * each real HDRI of ../shared/data/hdri (orthographic, view (0, 0, 1); the
  * renderer below reflects view rays off the sphere and reads the map with
  * its own equirectangular formulas, negatives clamped at 0), written as a

@@ -27,7 +27,7 @@
 #include "problem/problem.h"
 #include "fit_support.h"
 #include "lsq/lsq.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;

@@ -9,7 +9,9 @@ OUT ?= build/fuzz
 OBJ := $(OUT)/obj
 
 SANITIZE := -fsanitize=address,undefined -fno-sanitize-recover=undefined
-COMMON := -g -O1 -fno-omit-frame-pointer -Wall -Wextra -Werror -Iinclude -Isrc -MMD -MP
+# the layers' interfaces (src/*/include) and, for the white-box harnesses, src/
+INCLUDES := -Iinclude $(patsubst %,-I%,$(wildcard src/*/include)) -Isrc
+COMMON := -g -O1 -fno-omit-frame-pointer -Wall -Wextra -Werror $(INCLUDES) -MMD -MP
 CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L $(COMMON)
 CXXFLAGS := -std=c++17 $(COMMON)
 INSTRUMENT := -fsanitize=fuzzer-no-link $(SANITIZE)
@@ -54,10 +56,13 @@ $(foreach t,$(WRITERS),$(eval $(call link_target,$(t),-fsanitize=fuzzer-no-link 
 
 $(OUT)/gen/tailed_grid_gen: tools/tailed_grid_gen.c src/model/tailed.c tests/fuzz/fuzz.mk
 	@mkdir -p $(@D)
-	$(CC) -std=c11 -O2 -ffp-contract=off -Iinclude -Isrc $(filter %.c,$^) -lm -o $@
+	$(CC) -std=c11 -O2 -ffp-contract=off $(INCLUDES) -Isrc/model $(filter %.c,$^) -lm -o $@
 
 $(GRID): $(OUT)/gen/tailed_grid_gen
 	$< $@
+
+# the grid includes the model's private tailed.h, as in src/model
+$(call objects,$(GRID)): CFLAGS += -Isrc/model
 
 $(OBJ)/%.o: %.c tests/fuzz/fuzz.mk
 	@mkdir -p $(@D)

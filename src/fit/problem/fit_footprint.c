@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 #include "problem.h"
 
 /* The observations split into this many parts per thread (the integrated

@@ -4,7 +4,7 @@
 
 #include "fit_row.h"
 #include "fit_scratch.h"
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 
 /* A range of rows' predictions, on one thread. */
 typedef struct predict_job {

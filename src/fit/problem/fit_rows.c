@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lsq/parallel.h"
+#include "core/parallel.h"
 #include "problem.h"
 
 /* Problems of fewer observations are built on one thread: for DiLiGenT's

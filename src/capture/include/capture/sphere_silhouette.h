@@ -1,6 +1,7 @@
 /* The sphere found from the photos: its silhouette in each image (OpenCV),
- * then its centre and radius from all views by least squares. Private to
- * src/capture.
+ * then its centre and radius from all views by least squares. Capture's
+ * interface to the layers above (src/capture/include), for the chrome
+ * ball's outline (chrome_ball.h).
  *
  * Pixel coordinates here are COLMAP's continuous ones: pixel (x, y) of a
  * cf_image (column x, row y, top row first) covers [x, x+1) × [y, y+1) and

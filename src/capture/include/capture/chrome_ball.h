@@ -1,8 +1,9 @@
 /* Light directions from photos of a chrome (mirror) ball: the ball's
  * outline, its highlights, and the direction each one reflects, with how far
  * a one-pixel error moves it. Pure C; the outline comes from the sphere
- * component (sphere_silhouette.h, OpenCV). Private to src/capture; the
- * `clayfit lights` command is its user (docs/lights.md).
+ * component (sphere_silhouette.h, OpenCV). Capture's interface to the
+ * layers above (src/capture/include): `clayfit lights` is its user
+ * (docs/lights.md).
  *
  * Frames. Orthographic (camera NULL): DiLiGenT's, x right, y up, z toward
  * the camera, view v = (0, 0, 1) everywhere. A COLMAP camera: its own frame,
@@ -18,7 +19,7 @@
 #include "clayfit/colmap.h"
 #include "clayfit/image.h"
 #include "clayfit/status.h"
-#include "sphere_silhouette.h"
+#include "capture/sphere_silhouette.h"
 
 enum { CF_CHROME_MAX_LIGHTS = 16 };
 

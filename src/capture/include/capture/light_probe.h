@@ -1,8 +1,8 @@
 /* A light probe from a photo of a chrome (mirror) ball: exposure brackets
  * merged to radiance, and the ball unwrapped into the equirectangular
  * environment map that a capture's `environment` light reads
- * (src/capture/envmap.h, docs/lights.md "Light probe"). Private to
- * src/capture and the CLI.
+ * (src/capture/envmap.h, docs/lights.md "Light probe"). Capture's
+ * interface to the layers above (src/capture/include): the CLI is its user.
  *
  * Frames: the ball's photo is orthographic, looking down −z, with x right,
  * y up and z toward the camera (DiLiGenT's frame): the view direction is

@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "core/vec.h"
+
 typedef struct cf_rng {
   uint64_t s[4];
 } cf_rng;
@@ -46,7 +48,7 @@ static inline double cf_rng_uniform(cf_rng *r) {
 /* A normal deviate (Box-Muller). */
 static inline double cf_rng_gaussian(cf_rng *r) {
   double u1 = cf_rng_uniform(r), u2 = cf_rng_uniform(r);
-  return sqrt(-2.0 * log(1.0 - u1)) * cos(6.283185307179586477 * u2);
+  return sqrt(-2.0 * log(1.0 - u1)) * cos(2.0 * CF_PI * u2);
 }
 
 /* Uniform in [lo, hi]. */
@@ -58,7 +60,7 @@ static inline double cf_rng_range(cf_rng *r, double lo, double hi) {
 static inline void cf_rng_unit_vector(cf_rng *r, double out[3]) {
   double z = 1.0 - 2.0 * cf_rng_uniform(r);
   double s = sqrt(fmax(0.0, 1.0 - z * z));
-  double phi = 2.0 * 3.14159265358979323846 * cf_rng_uniform(r);
+  double phi = 2.0 * CF_PI * cf_rng_uniform(r);
   out[0] = s * cos(phi);
   out[1] = s * sin(phi);
   out[2] = z;

@@ -5,8 +5,9 @@
  * ("capture.json: lights[2].intensity[1]: expected a number, got a
  * string"). Parse errors name the line and column. In core (it needs only
  * Jansson) so that every layer reads its files with it: src/capture the
- * capture files, src/fit fit.json, src/export the json presets. Private to
- * the library, never part of the public headers. */
+ * capture files, src/fit fit.json, src/export the json presets. An interface
+ * of core to the layers above (src/core/include), never part of the public
+ * headers. */
 #ifndef CLAYFIT_CORE_JSON_READER_H
 #define CLAYFIT_CORE_JSON_READER_H
 

@@ -1,5 +1,6 @@
-/* Independent pieces of work side by side (parallel.h). */
-#include "parallel.h"
+/* The one thread pool (parallel.h). */
+#define _POSIX_C_SOURCE 200809L /* pthreads */
+#include "core/parallel.h"
 
 #include <pthread.h>
 
@@ -24,13 +25,15 @@ static void *worker(void *arg) {
 }
 
 void cf_parallel_for(int count, int threads, void (*work)(void *user, int i), void *user) {
-  parallel_for f = {count, 0, work, user, PTHREAD_MUTEX_INITIALIZER};
+  if (count <= 0) return;
+  parallel_for f = {count, 1, work, user, PTHREAD_MUTEX_INITIALIZER}; /* 0 is this thread's */
   if (threads > MOST_THREADS) threads = MOST_THREADS;
   if (threads > count) threads = count;
   pthread_t pool[MOST_THREADS];
   int started = 0;
   for (; started + 1 < threads; ++started) /* this thread is the last worker */
     if (pthread_create(&pool[started], NULL, worker, &f) != 0) break;
+  work(user, 0);
   worker(&f);
   for (int t = 0; t < started; ++t) pthread_join(pool[t], NULL);
   pthread_mutex_destroy(&f.lock);

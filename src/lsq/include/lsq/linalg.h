@@ -1,7 +1,7 @@
 /* Dense symmetric linear algebra for the layers above, by Eigen (which
  * Ceres brings): the one eigen-decomposition and the one Cholesky
- * factorisation of the project. Matrices are row-major, n × n. Private to
- * the layers above src/lsq. */
+ * factorisation of the project. Matrices are row-major, n × n. lsq's
+ * interface to the layers above (src/lsq/include). */
 #ifndef CLAYFIT_LSQ_LINALG_H
 #define CLAYFIT_LSQ_LINALG_H
 
