@@ -102,7 +102,7 @@ cf_status fit_test_hidden_base(fit_problem *p, fit_plan *plan, const cf_fit_opti
   if (out->slots == 0) return CF_OK;
   size_t n = 3 * fit_problem_count(p);
   cf_status s = base_contribution(p, &out->visible, err);
-  /* 100 σ² a residual: plainly visible (9156243, not measured; 2 of 161 test fits are below) */
+  /* 100 σ² a residual: plainly visible (9156243; 2 of 161 test fits below; 50, 200: none moves) */
   if (s != CF_OK || out->visible > 100.0 * (double)n) return s;
   out->tested = 1;
   out->price = out->slots * log((double)n);

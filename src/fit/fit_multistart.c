@@ -15,7 +15,7 @@
  * subsample of about SUBSAMPLE_TARGET observations spread over the
  * images. */
 enum {
-  SUBSAMPLE_TARGET = 4000, /* fd063f4, not measured (the multi-start as a whole: fit_starts.c) */
+  SUBSAMPLE_TARGET = 4000, /* fd063f4; at 2000 or 8000 all 10 screened fits move (study) */
   START_ITERATIONS = 300   /* reached by 5 of 4686 starts in the fit tests */
 };
 
@@ -110,7 +110,7 @@ void fit_base_start(const fit_problem *p, const fit_plan *plan, const cf_fit_opt
  *     data barely constrain (a film's optical depth against the albedo
  *     under it) a start otherwise crawls to the minimum for tens of
  *     iterations. */
-#define START_SAME_BASIN 0.01 /* 65bb077, not measured (tuned-constants study) */
+#define START_SAME_BASIN 0.01 /* 65bb077; 0.005, 0.02: no chosen fit's value moves (study) */
 
 typedef struct earlier_ends {
   const fit_problem *p;
@@ -381,7 +381,7 @@ int fit_ambiguous(const cf_fit_result *r, cf_model_id model, double sigma2) {
         distance = fmax(distance, fabs(d));
       }
     }
-    if (distance > 0.05) return 1; /* fd063f4, not measured: a flag in fit.json, no value moves */
+    if (distance > 0.05) return 1; /* fd063f4; 0.025, 0.1: no screened fit's flag moves */
   }
   return 0;
 }

@@ -20,7 +20,7 @@
 enum {
   K = CF_RESPONSE_MODEL_KNOTS,
   START_TARGET = 6000, /* observations a start is solved on (7426efe: h13's choice) */
-  START_ROUNDS = 2     /* reweighted solves per stage of a start (7426efe, not measured) */
+  START_ROUNDS = 2     /* reweighted solves a stage (7426efe; 1: 1 of 10 fits moves, 4: none) */
 };
 
 /* The mean log of the subsample's positive measurements: the level at
@@ -49,7 +49,7 @@ static void camera_slopes(const cf_capture_summary *about, cf_response camera, d
   }
 }
 
-/* Are two curves the same start (slopes within 0.1 at every knot: 7426efe, not measured)? */
+/* Two curves the same start (slopes within 0.1 at every knot: 7426efe; 0.05, 0.2 move no fit)? */
 static int same_start(const double *a, const double *b) {
   for (int j = 0; j < K; ++j)
     if (fabs(a[j] - b[j]) > 0.1) return 0;

@@ -153,7 +153,7 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
   int weakest = 0;
   for (int i = 0; i < m; ++i) {
     if (values[i] < values[weakest]) weakest = i;
-    if (values[i] > 1e-10 * largest) continue; /* fd063f4, not measured (study) */
+    if (values[i] > 1e-10 * largest) continue; /* fd063f4; 1e-12, 1e-8: no fit moves (study) */
     for (int k = 0; k < m; ++k) /* 0.3 < 1/√11: a weak direction of M4's 11 slots marks one */
       if (fabs(vectors[k * m + i]) > 0.3) {
         plan->status[slots[k]] = CF_PARAM_UNCONSTRAINED;

@@ -346,7 +346,7 @@ extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   // the function tolerance stops the fit's solves: at Ceres' 1e-6, 28 of 29 screened fits move
   // (4 hold another slot, the rest up to 4.9 sd); the gradient and parameter tolerances at
   // Ceres' 1e-10 and 1e-8 move none of the 29 (bench/peers uses these too); the line
-  // search's 1e-3 is fd063f4's, not measured (studies/2026-12-07-tuned-constants.md)
+  // search's 1e-3 is fd063f4's: at 5e-4 1 of 10 fits moves (0.02 sd), at 2e-3 none (the study)
   options->function_tolerance = 1e-10;
   options->gradient_tolerance = 1e-12;
   options->parameter_tolerance = 1e-10;
