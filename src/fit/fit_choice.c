@@ -59,6 +59,7 @@ static cf_status split_sample(const cf_capture *capture, const unsigned char *us
     else
       split->train[split->train_count++] = (uint32_t)i;
   }
+  /* a guard: 16 observations are 48 residuals, above M4T's 12 unknowns; every fourth held out */
   if (split->train_count < 16 || split->test_count < 4)
     return cf_error_set(err, CF_EINVAL,
                         "too few observations to choose the model (%zu for training, %zu held "

@@ -230,6 +230,7 @@ static cf_status judge_gains(const fit_problem *p, int per_light, const double *
     gain_parts(weakest, groups, part);
     double most = 0.0;
     for (size_t q = 0; q < groups; ++q) most = fmax(most, fabs(part[q]));
+    /* 30 % of the largest part: named in the message only (69a8156, not measured) */
     for (size_t q = 0; q < groups; ++q) group_flag[q] = fabs(part[q]) > 0.3 * most;
     gain_subject(p, per_light, group_flag, flag, names, sizeof names);
     s = cf_error_set(

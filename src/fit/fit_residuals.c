@@ -138,6 +138,7 @@ cf_status fit_estimate_sigma(fit_problem *p, double *sigma, cf_error *err) {
     else if (!order_weighted_median(prediction, measured, m, &median))
       s = cf_error_set(err, CF_ENOMEM, "out of memory");
   }
+  /* (1e-12: a positive σ for a fit that is exact to rounding, not a trade) */
   if (s == CF_OK) *sigma = median > 0.0 ? 1.4826 * median : 1e-12;
   free(prediction);
   free(measured);

@@ -134,6 +134,7 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
       if (!free_material(p, u)) continue;
       int slot = fit_problem_unknown(p, u).slot;
       double sd = fit_slot_sd(p, slot, covariance[u * n + u]);
+      /* half the range: the data do not place it inside its bounds (a derivation) */
       if (sd > 0.5 * fit_slot_width(fit_problem_model(p), slot)) {
         plan->status[slot] = CF_PARAM_UNCONSTRAINED;
         *found = 1;
@@ -152,8 +153,8 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
   int weakest = 0;
   for (int i = 0; i < m; ++i) {
     if (values[i] < values[weakest]) weakest = i;
-    if (values[i] > 1e-10 * largest) continue;
-    for (int k = 0; k < m; ++k)
+    if (values[i] > 1e-10 * largest) continue; /* fd063f4; 1e-12, 1e-8: no fit moves (study) */
+    for (int k = 0; k < m; ++k) /* 0.3 < 1/√11: a weak direction of M4's 11 slots marks one */
       if (fabs(vectors[k * m + i]) > 0.3) {
         plan->status[slots[k]] = CF_PARAM_UNCONSTRAINED;
         *found = 1;

@@ -46,7 +46,7 @@ cf_status fit_find_unconstrained(fit_problem *p, const double *jtj, const double
  * FIT_TILES_PER_UNKNOWN tiles per unknown (*applied 0). */
 cf_status fit_tile_covariance(const fit_problem *p, int tile_px, double *covariance, int *applied,
                               cf_error *err);
-#define FIT_TILES_PER_UNKNOWN 4
+#define FIT_TILES_PER_UNKNOWN 4 /* 69a8156: B of rank n needs n tiles; 2, 8 move no fit (study) */
 
 /* The tiles of a JPEG capture: its 4:2:0 coding unit, 16 × 16 pixels. */
 #define FIT_JPEG_TILE_PX 16

@@ -78,7 +78,7 @@ Eigen::MatrixXd scaled_pseudo_inverse(const Eigen::MatrixXd &a, double relative)
 extern "C" int cf_schur_covariance(int n, int g, const double *a, double *covariance,
                                    double *weakest) {
   if (n <= 0 || g <= 0 || g > n || !all_finite(n, a)) return -1;
-  constexpr double relative = 1e-10;
+  constexpr double relative = 1e-10;  // 69a8156; 1e-12, 1e-8: no screened fit moves (study)
   try {
     const int m = n - g;
     Eigen::Map<const RowMajor> full(a, n, n);

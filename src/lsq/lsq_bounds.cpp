@@ -23,7 +23,7 @@ ceres::CallbackReturnType BoundWatcher::operator()(const ceres::IterationSummary
     if (active_[i] != 0) continue;
     const int side = side_of(i);
     streak_[i] = side != 0 ? streak_[i] + 1 : 0;
-    if (streak_[i] >= 2) hit_[i] = side, stop = true;
+    if (streak_[i] >= 2) hit_[i] = side, stop = true;  // the active set: docs/solver.md; 2 not varied
     if (it.step_is_successful && it.iteration > 0 && side == 0 &&
         closing_in(i, it.relative_decrease) && closings_[i] < MAX_CLOSINGS)
       hit_[i] = near_[i], closed_[i] = 1, stop = true;

@@ -34,7 +34,7 @@ class BoundWatcher final : public ceres::IterationCallback {
   // A parameter is pinned for closing in at most twice a solve: when the
   // Newton step frees it twice, it is believed, and the poor steps are left
   // to converge as they can.
-  static constexpr int MAX_CLOSINGS = 2;
+  static constexpr int MAX_CLOSINGS = 2;  // 0aac5d5 (DiLiGenT 89 iterations -> 18); 2 not measured
 
   // closings: the times each parameter was pinned for closing in so far
   BoundWatcher(const cf_lsq_problem *problem, const cf_lsq_options *options,

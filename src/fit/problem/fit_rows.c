@@ -65,6 +65,7 @@ cf_status fit_rows_init(fit_rows *rows, const cf_observations *obs, const uint32
     fit_rows_release(rows);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", wanted);
   }
+  /* 4 parts a thread even out their work (d2747dc: 1.4 M observations 0.24-0.29 -> 0.16-0.20 s) */
   init_job job = {rows, obs, threads > 1 && rows->count >= INIT_PARALLEL_MIN ? 4 * threads : 1};
   cf_parallel_for(job.parts, threads > 1 ? threads : 1, init_part, &job);
   return CF_OK;

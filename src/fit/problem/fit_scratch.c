@@ -6,7 +6,7 @@
 
 /* Buffers in a problem's pool: more than the solver's threads ever take
  * at once (an evaluation beyond takes one of its own). */
-enum { SCRATCH_POOL = 16 };
+enum { SCRATCH_POOL = 16 }; /* the threads' cap (MOST_THREADS): a derivation */
 
 static void free_arrays(fit_scratch *s) {
   free(s->f);

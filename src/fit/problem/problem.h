@@ -91,7 +91,7 @@ struct fit_run {
   int first, count;
 };
 
-enum { FIT_MAX_RUNS = 8 };
+enum { FIT_MAX_RUNS = 8 }; /* above the 6 kinds of unknown (fit_problem.h): a derivation */
 
 typedef struct fit_unknowns {
   /* num of them, in arrays that grow as unknowns are declared (capacity) */
@@ -119,7 +119,7 @@ void fit_unknowns_values_at(const fit_problem *p, const double *x, fit_values *v
  * compressed normal equations, lsq.h); block b's columns
  * (the unknowns its Jacobian can be nonzero in, ascending) are
  * column[column_begin[b] ... column_begin[b + 1]). */
-enum { FIT_BLOCK_SIZE = 1024 };
+enum { FIT_BLOCK_SIZE = 1024 }; /* fd063f4: threads' and cache's unit; time not measured (study) */
 typedef struct fit_blocks {
   size_t size, count;
   size_t *column_begin;
