@@ -22,9 +22,10 @@ Usage: check_links.py REPOSITORY_ROOT
 """
 import os
 import re
-import subprocess
 import sys
 import tempfile
+
+from repository import repository_files
 
 LINK = re.compile(r"!?\[(?:[^\]\[]|\[[^\]]*\])*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 DOC_PATH = re.compile(r"(?<![\w./-])docs/(?:[\w.-]+/)*[\w.-]+\.md\b")
@@ -32,25 +33,6 @@ FENCE = re.compile(r"^\s*(```|~~~)")
 HEADING = re.compile(r"^ {0,3}(#{1,6})\s+(.*?)\s*#*\s*$")
 STUDY = re.compile(r"^(\d{4}-\d{2}-\d{2})-[\w.-]+\.md$")
 STUDIES = os.path.join("docs", "studies")
-
-
-def repository_files(root):
-    """git's tracked and untracked, not ignored files; without git every file
-    outside .git and the top-level build folder."""
-    try:
-        listing = subprocess.run(
-            ["git", "-C", root, "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
-            capture_output=True, check=True).stdout
-        return sorted({name for name in listing.decode("utf-8").split("\0") if name})
-    except (OSError, subprocess.CalledProcessError):
-        pass
-    names = []
-    for folder, dirs, files in os.walk(root):
-        rel = os.path.relpath(folder, root)
-        dirs[:] = [d for d in dirs
-                   if d != ".git" and d != "__pycache__" and not (rel == "." and d == "build")]
-        names += [os.path.normpath(os.path.join(rel, name)) for name in files]
-    return sorted(names)
 
 
 def read_text(path):

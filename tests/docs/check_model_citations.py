@@ -14,8 +14,9 @@ Usage: check_model_citations.py REPOSITORY_ROOT
 """
 import os
 import re
-import subprocess
 import sys
+
+from repository import repository_files
 
 OLD_NAME = "MODEL" + ".md"  # the old, out-of-tree document
 DOC = os.path.join("docs", "model.md")
@@ -27,26 +28,6 @@ REFERENCE = re.compile(
     r"\s*(?:,|and|to|–|-)?\s*(?:\((\d+(?:\s*[,–-]\s*\d+)*)\)|§\s?(\d+(?:\.\d+)*))")
 TAG = re.compile(r"\\tag\{(\d+)\}")
 HEADING = re.compile(r"^#{2,6}\s+(\d+(?:\.\d+)*)\.?\s", re.MULTILINE)
-
-
-def repository_files(root):
-    """The repository's files: git's tracked and untracked ones that are not
-    ignored (so not build/ or out/), or without git every file outside .git
-    and the top-level build folder."""
-    try:
-        listing = subprocess.run(
-            ["git", "-C", root, "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
-            capture_output=True, check=True).stdout
-        return sorted({name for name in listing.decode("utf-8").split("\0") if name})
-    except (OSError, subprocess.CalledProcessError):
-        pass
-    names = []
-    for folder, dirs, files in os.walk(root):
-        rel = os.path.relpath(folder, root)
-        dirs[:] = [d for d in dirs
-                   if d != ".git" and d != "__pycache__" and not (rel == "." and d == "build")]
-        names += [os.path.relpath(os.path.join(folder, name), root) for name in files]
-    return sorted(names)
 
 
 def text_files(root):
