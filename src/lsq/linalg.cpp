@@ -1,10 +1,17 @@
-// Dense symmetric linear algebra by Eigen (linalg.h). No exception crosses
-// the C boundary.
+// Dense symmetric linear algebra by Eigen (linalg.h), and the solver's own
+// (cf_lsq_covariance, lsq.h; the reduced Newton step, lsq_newton.h): the
+// project's Eigen decompositions in one file, compiled once (four files
+// each instantiating them took half the demo's build). No exception
+// crosses the C boundary.
 #include "lsq/linalg.h"
+#include "lsq/lsq.h"
+#include "lsq_newton.h"
 
 #include <Eigen/Dense>
 
 #include <cmath>
+#include <new>
+#include <vector>
 
 namespace {
 
@@ -126,3 +133,73 @@ extern "C" int cf_sandwich(int n, const double *a, double *b) {
     return 0;
   }
 }
+
+extern "C" cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance,
+                                       int *rank_deficient, cf_error *err) {
+  try {
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    Eigen::Map<const RowMajor> a(jtj, n, n);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+    if (eigen.info() != Eigen::Success)
+      return cf_error_set(err, CF_ENUMERIC, "the normal matrix could not be decomposed");
+    // singular when the smallest eigenvalue is below 1e-12 of the largest:
+    // ceres::Covariance's DENSE_SVD test on J, whose singular values are
+    // their square roots (min_reciprocal_condition_number 1e-12)
+    const Eigen::VectorXd &values = eigen.eigenvalues();  // ascending
+    const double largest = values(n - 1);
+    if (!(largest > 0.0) || !(values(0) >= 1e-12 * largest)) {
+      if (rank_deficient) *rank_deficient = 1;
+      return CF_OK;
+    }
+    if (rank_deficient) *rank_deficient = 0;
+    const Eigen::MatrixXd &v = eigen.eigenvectors();  // (JᵀJ)⁻¹ = V Λ⁻¹ Vᵀ
+    Eigen::Map<RowMajor>(covariance, n, n) = v * values.cwiseInverse().asDiagonal() * v.transpose();
+    return CF_OK;
+  } catch (const std::bad_alloc &) {
+    return cf_error_set(err, CF_ENOMEM, "out of memory for the covariance");
+  } catch (...) {
+    return cf_error_set(err, CF_ENUMERIC, "the covariance failed");
+  }
+}
+
+namespace lsq {
+
+// The Gauss-Newton step of the parameters not pinned (pinned[i] == 0)
+// with the pinned ones held: d = −H⁺ g over the free ones, H their block
+// of jtj (n × n, row-major), H⁺ its pseudo-inverse V Λ⁺ Vᵀ with
+// eigenvalues below 1e-12 of the largest dropped (a direction no data see
+// takes no step). free_index gets the free parameters, step their
+// components, in that order; returns the decrement ½ gᵀ H⁺ g, the cost
+// the quadratic model says the step removes (0 when nothing is free).
+double reduced_newton_step(int n, const double *jtj, const double *g, const int *pinned,
+                           std::vector<int> *free_index, std::vector<double> *step) {
+  free_index->clear();
+  for (int i = 0; i < n; ++i)
+    if (pinned == nullptr || pinned[i] == 0) free_index->push_back(i);
+  const int m = static_cast<int>(free_index->size());
+  step->assign(m, 0.0);
+  if (m == 0) return 0.0;
+  Eigen::MatrixXd h(m, m);
+  Eigen::VectorXd minus_g(m);
+  for (int a = 0; a < m; ++a) {
+    minus_g(a) = -g[(*free_index)[a]];
+    for (int b = 0; b < m; ++b)
+      h(a, b) = jtj[static_cast<size_t>((*free_index)[a]) * n + (*free_index)[b]];
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(h);
+  if (eigen.info() != Eigen::Success) return HUGE_VAL;
+  const Eigen::VectorXd &values = eigen.eigenvalues();  // ascending
+  const Eigen::MatrixXd &v = eigen.eigenvectors();
+  const Eigen::VectorXd projection = v.transpose() * minus_g;
+  Eigen::VectorXd scaled = Eigen::VectorXd::Zero(m);
+  double decrement = 0.0;
+  for (int i = 0; i < m; ++i) {
+    if (!(values(i) > 1e-12 * values(m - 1))) continue;
+    scaled(i) = projection(i) / values(i);
+    decrement += 0.5 * projection(i) * scaled(i);
+  }
+  Eigen::Map<Eigen::VectorXd>(step->data(), m) = v * scaled;
+  return decrement;
+}
+
+}  // namespace lsq

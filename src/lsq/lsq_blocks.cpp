@@ -5,6 +5,10 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include <Eigen/Core>
+
+#include "lsq/linalg.h"
+
 namespace lsq {
 
 // One residual block of the C problem, compressed (lsq.h): k + 1
@@ -69,23 +73,26 @@ class BlockCost final : public ceres::CostFunction {
       const double d = jtj(c, c);
       unit(c) = d > 0.0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 1.0;
     }
-    const Eigen::MatrixXd scaled = unit.asDiagonal() * jtj * unit.asDiagonal();
+    std::vector<double> scaled(static_cast<size_t>(k) * k), values(k), vectors(scaled.size());
+    for (int r = 0; r < k; ++r)
+      for (int c = 0; c < k; ++c)
+        scaled[static_cast<size_t>(r) * k + c] = unit(r) * jtj(r, c) * unit(c);  // as Eigen's D J D
+    if (!cf_symmetric_eigen(k, scaled.data(), values.data(), vectors.data())) return false;
+    const Eigen::MatrixXd v = Eigen::Map<const RowMajor>(vectors.data(), k, k);
     const Eigen::VectorXd scaled_jtu = unit.cwiseProduct(jtu);
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-    if (eigen.info() != Eigen::Success) return false;
-    const double largest = std::max(0.0, eigen.eigenvalues().maxCoeff());
+    const double largest = std::max(0.0, *std::max_element(values.begin(), values.end()));
     double projected = 0.0;
     std::fill(jacobian, jacobian + static_cast<size_t>(k + 1) * n, 0.0);
     for (int i = 0; i < k; ++i) {
-      const double lambda = eigen.eigenvalues()(i);
+      const double lambda = values[i];
       residuals[i] = 0.0;
       if (!(lambda > 1e-14 * largest)) continue;  // a direction the block does not see
       const double root = std::sqrt(lambda);
-      residuals[i] = eigen.eigenvectors().col(i).dot(scaled_jtu) / root;
+      residuals[i] = v.col(i).dot(scaled_jtu) / root;
       projected += residuals[i] * residuals[i];
       for (int c = 0; c < k; ++c)
         jacobian[static_cast<size_t>(i) * n + columns_[c]] =
-            root * eigen.eigenvectors()(c, i) / unit(c);
+            root * v(c, i) / unit(c);
     }
     residuals[k] = std::sqrt(std::max(0.0, 2.0 * cost - projected));
     return true;

@@ -5,7 +5,7 @@
 #ifndef CLAYFIT_LSQ_BLOCKS_H
 #define CLAYFIT_LSQ_BLOCKS_H
 
-#include <ceres/ceres.h>
+#include <ceres/cost_function.h>
 
 #include <algorithm>
 #include <cstddef>

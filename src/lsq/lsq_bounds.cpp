@@ -51,44 +51,6 @@ bool BoundWatcher::closing_in(size_t i, double relative_decrease) {
   return approach_[i] >= 3 && distance < 0.01 * (upper - lower);
 }
 
-// The Gauss-Newton step of the parameters not pinned (pinned[i] == 0)
-// with the pinned ones held: d = −H⁺ g over the free ones, H their block
-// of jtj (n × n, row-major), H⁺ its pseudo-inverse V Λ⁺ Vᵀ with
-// eigenvalues below 1e-12 of the largest dropped (a direction no data see
-// takes no step). free_index gets the free parameters, step their
-// components, in that order; returns the decrement ½ gᵀ H⁺ g, the cost
-// the quadratic model says the step removes (0 when nothing is free).
-double reduced_newton_step(int n, const double *jtj, const double *g, const int *pinned,
-                           std::vector<int> *free_index, Eigen::VectorXd *step) {
-  free_index->clear();
-  for (int i = 0; i < n; ++i)
-    if (pinned == nullptr || pinned[i] == 0) free_index->push_back(i);
-  const int m = static_cast<int>(free_index->size());
-  *step = Eigen::VectorXd::Zero(m);
-  if (m == 0) return 0.0;
-  Eigen::MatrixXd h(m, m);
-  Eigen::VectorXd minus_g(m);
-  for (int a = 0; a < m; ++a) {
-    minus_g(a) = -g[(*free_index)[a]];
-    for (int b = 0; b < m; ++b)
-      h(a, b) = jtj[static_cast<size_t>((*free_index)[a]) * n + (*free_index)[b]];
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(h);
-  if (eigen.info() != Eigen::Success) return HUGE_VAL;
-  const Eigen::VectorXd &values = eigen.eigenvalues();  // ascending
-  const Eigen::MatrixXd &v = eigen.eigenvectors();
-  const Eigen::VectorXd projection = v.transpose() * minus_g;
-  Eigen::VectorXd scaled = Eigen::VectorXd::Zero(m);
-  double decrement = 0.0;
-  for (int i = 0; i < m; ++i) {
-    if (!(values(i) > 1e-12 * values(m - 1))) continue;
-    scaled(i) = projection(i) / values(i);
-    decrement += 0.5 * projection(i) * scaled(i);
-  }
-  *step = v * scaled;
-  return decrement;
-}
-
 // Which parameters at a bound (side: −1, +1; 0 for one inside the box)
 // stay pinned there. One that hit the bound on its way, the first time in
 // a solve, by its gradient: pinned when it points out of the box, freed
@@ -115,7 +77,7 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
   for (int i = 0; i < n; ++i)  // the gradient's decisions (descent is −g)
     if (side[i] != 0 && !by_newton[i] && side[i] * -g[i] > 0.0) (*pinned)[i] = side[i];
   std::vector<int> free_index;
-  Eigen::VectorXd step;
+  std::vector<double> step;
   for (;;) {
     reduced_newton_step(n, jtj.data(), g.data(), pinned->data(), &free_index, &step);
     const int m = static_cast<int>(free_index.size());
@@ -123,7 +85,7 @@ bool pinned_at_bounds(const cf_lsq_problem *problem, int threads, std::vector<Bl
     bool changed = false;
     for (int a = 0; a < m; ++a) {
       const int i = free_index[a];
-      if (side[i] != 0 && by_newton[i] && side[i] * step(a) > 0.0)
+      if (side[i] != 0 && by_newton[i] && side[i] * step[a] > 0.0)
         (*pinned)[i] = side[i], changed = true;
     }
     if (!changed) return true;
@@ -154,7 +116,7 @@ bool newton_pins(cf_lsq_problem *problem, int threads, std::vector<BlockCache> *
   if (normal_equations(problem, threads, caches, jtj.data(), g.data(), &cost) != CF_LSQ_EVALUATED)
     return false;
   std::vector<int> free_index;
-  Eigen::VectorXd step;
+  std::vector<double> step;
   for (bool first = true;;) {
     const double decrement =
         reduced_newton_step(n, jtj.data(), g.data(), active->data(), &free_index, &step);
@@ -169,7 +131,7 @@ bool newton_pins(cf_lsq_problem *problem, int threads, std::vector<BlockCache> *
     bool changed = false;
     for (int a = 0; a < m; ++a) {
       const int i = free_index[a];
-      const double target = problem->x[i] + step(a);
+      const double target = problem->x[i] + step[a];
       if (!std::isfinite(target)) continue;
       // beyond the bound by at least the distance inside it: a step that
       // only just leaves can be the quadratic model's error (the
@@ -192,7 +154,7 @@ extern "C" double cf_lsq_newton_decrement(int n, const double *jtj, const double
                                           const int *pinned) {
   try {
     std::vector<int> free_index;
-    Eigen::VectorXd step;
+    std::vector<double> step;
     return lsq::reduced_newton_step(n, jtj, g, pinned, &free_index, &step);
   } catch (...) {  // out of memory: nothing known, nothing settled
     return HUGE_VAL;

@@ -8,13 +8,14 @@
 #ifndef CLAYFIT_LSQ_BOUNDS_H
 #define CLAYFIT_LSQ_BOUNDS_H
 
-#include <ceres/ceres.h>
+#include <ceres/iteration_callback.h>
+#include <ceres/manifold.h>
 
-#include <Eigen/Dense>
 #include <vector>
 
 #include "lsq/lsq.h"
 #include "lsq_blocks.h"
+#include "lsq_newton.h"
 
 namespace lsq {
 
@@ -92,11 +93,6 @@ class BoundWatcher final : public ceres::IterationCallback {
   bool stopped_ = false;
   std::vector<double> previous_, current_;
 };
-
-// The Gauss-Newton step over the parameters not pinned and its decrement
-// (lsq_bounds.cpp).
-double reduced_newton_step(int n, const double *jtj, const double *g, const int *pinned,
-                           std::vector<int> *free_index, Eigen::VectorXd *step);
 
 // Which parameters at a bound (side: −1, +1; 0 for one inside the box)
 // stay pinned there at the end of a round (lsq_bounds.cpp). Returns false

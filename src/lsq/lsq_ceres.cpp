@@ -5,9 +5,10 @@
 // (lsq_line_search.h); the covariance from the normal matrix's
 // eigen-decomposition. What each device buys, measured, is in
 // docs/solver.md. No exception crosses the C boundary.
-#include <ceres/ceres.h>
+#include <ceres/manifold.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -312,33 +313,6 @@ extern "C" const char *cf_lsq_termination_name(cf_lsq_termination termination) {
   }
 }
 
-extern "C" cf_status cf_lsq_covariance(int n, const double *jtj, double *covariance,
-                                       int *rank_deficient, cf_error *err) {
-  try {
-    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    Eigen::Map<const RowMajor> a(jtj, n, n);
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
-    if (eigen.info() != Eigen::Success)
-      return cf_error_set(err, CF_ENUMERIC, "the normal matrix could not be decomposed");
-    // singular when the smallest eigenvalue is below 1e-12 of the largest:
-    // ceres::Covariance's DENSE_SVD test on J, whose singular values are
-    // their square roots (min_reciprocal_condition_number 1e-12)
-    const Eigen::VectorXd &values = eigen.eigenvalues();  // ascending
-    const double largest = values(n - 1);
-    if (!(largest > 0.0) || !(values(0) >= 1e-12 * largest)) {
-      if (rank_deficient) *rank_deficient = 1;
-      return CF_OK;
-    }
-    if (rank_deficient) *rank_deficient = 0;
-    const Eigen::MatrixXd &v = eigen.eigenvectors();  // (JᵀJ)⁻¹ = V Λ⁻¹ Vᵀ
-    Eigen::Map<RowMajor>(covariance, n, n) = v * values.cwiseInverse().asDiagonal() * v.transpose();
-    return CF_OK;
-  } catch (const std::bad_alloc &) {
-    return cf_error_set(err, CF_ENOMEM, "out of memory for the covariance");
-  } catch (...) {
-    return cf_error_set(err, CF_ENUMERIC, "the covariance failed");
-  }
-}
 
 extern "C" void cf_lsq_default_options(cf_lsq_options *options) {
   options->max_iterations = 100;  // the fit passes its own (cf_fit_options.max_iterations)

@@ -10,7 +10,7 @@
 #ifndef CLAYFIT_LSQ_LINE_SEARCH_H
 #define CLAYFIT_LSQ_LINE_SEARCH_H
 
-#include <ceres/ceres.h>
+#include <ceres/solver.h>
 
 #include <vector>
 
