@@ -56,6 +56,19 @@ cf_status image_jpeg_write(const char *path, const cf_image *image, int quality,
 cf_status image_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma, cf_image *out,
                                cf_error *err);
 
+/* ---- EXIF (image_exif.c) ---- */
+
+/* The exposure time (tag 0x829A), f-number (0x829D) and ISO (0x8827) of
+ * an EXIF block (its TIFF structure, after JPEG's "Exif\0\0"), into info
+ * where present, finite and positive. Every offset is checked against
+ * `size`: a malformed field is skipped, never read outside the block. */
+void image_exif_read(const unsigned char *tiff, size_t size, cf_image_info *info);
+
+/* The EXIF block (TIFF structure) holding info's finite exposure time,
+ * f-number and ISO, written into out (capacity bytes); its size, or 0
+ * when info has none of them. */
+size_t image_exif_write(const cf_image_info *info, unsigned char *out, size_t capacity);
+
 /* ---- OpenImageIO (image_oiio.cpp) ---- */
 
 /* The general reader: any format OpenImageIO opens, by `path`, the same
