@@ -1,11 +1,44 @@
-/* What every codec shares (image_codec.h): the header checks, the data
+/* What every codec shares (image_codec.h): images allocated and freed
+ * (include/clayfit/image.h), the header checks, the data
  * window refusal, and the conversions between integer samples and float. */
 #include "image_codec.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* 2^31: the most values clayfit reads or allocates in one image. */
 #define MOST_VALUES ((int64_t)1 << 31)
+
+cf_status cf_image_alloc(cf_image *image, int width, int height, int channels, cf_error *err) {
+  image->width = image->height = image->channels = 0;
+  image->pixels = NULL;
+  if (width <= 0 || height <= 0 || channels < 1 || channels > 4)
+    return cf_error_set(err, CF_EINVAL,
+                        "cannot make an image of %d x %d pixels with %d channels (sizes must be "
+                        "positive, channels 1 to 4)",
+                        width, height, channels);
+  const int64_t values = (int64_t)width * height * channels;
+  if (values > MOST_VALUES)
+    return cf_error_set(err, CF_EINVAL,
+                        "an image of %d x %d pixels x %d channels has %lld values, more than 2^31",
+                        width, height, channels, (long long)values);
+  float *pixels = calloc((size_t)values, sizeof(float));
+  if (!pixels)
+    return cf_error_set(err, CF_ENOMEM, "out of memory for an image of %d x %d x %d floats", width,
+                        height, channels);
+  image->width = width;
+  image->height = height;
+  image->channels = channels;
+  image->pixels = pixels;
+  return CF_OK;
+}
+
+void cf_image_free(cf_image *image) {
+  if (!image) return;
+  free(image->pixels);
+  image->pixels = NULL;
+  image->width = image->height = image->channels = 0;
+}
 
 cf_status image_header_accept(const char *path, int width, int height, int channels,
                               int width_expected, int height_expected, cf_error *err) {

@@ -254,9 +254,13 @@ cf_status jpeg_roundtrip(const cf_image *in, int quality, const char *subsamplin
 
 }  // namespace
 
+/* The module's entry points (image_io.c finds them with dlsym); every
+ * other symbol of the module is hidden. */
+#define EXPORTED __attribute__((visibility("default")))
+
 extern "C" {
 
-cf_status image_oiio_read(const char *path, int width, int height, cf_image_header *header,
+EXPORTED cf_status image_oiio_read(const char *path, int width, int height, cf_image_header *header,
                           cf_image *image, cf_error *err) {
   try {
     return read_image(path, width, height, header, image, err);
@@ -265,7 +269,7 @@ cf_status image_oiio_read(const char *path, int width, int height, cf_image_head
   }
 }
 
-cf_status image_oiio_write(const char *path, const cf_image *image, int bits,
+EXPORTED cf_status image_oiio_write(const char *path, const cf_image *image, int bits,
                            const cf_image_info *info, int quality, cf_chroma chroma,
                            cf_error *err) {
   try {
@@ -278,7 +282,7 @@ cf_status image_oiio_write(const char *path, const cf_image *image, int bits,
   }
 }
 
-cf_status image_oiio_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma,
+EXPORTED cf_status image_oiio_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma,
                                     cf_image *out, cf_error *err) {
   try {
     return jpeg_roundtrip(in, quality, subsampling_name(chroma), out, err);
