@@ -20,6 +20,7 @@ packages=(
   libjansson-dev                     # JSON (CLI output, capture files)
   libceres-dev                       # fitting (and ceres::Jet in the tests)
   libopenimageio-dev                 # every image read and written
+  libopenexr-dev                     # OpenEXR files (src/capture/image_exr.cpp)
   libopencv-core-dev libopencv-imgproc-dev  # image analysis (sphere detection; cmake/FindOpenCV.cmake)
   libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
 )

@@ -1,6 +1,7 @@
 # clayfit_image: the OpenImageIO adapter (the only C++ here), colour
 # decoding, environment maps.
+find_package(OpenEXR 3.1 CONFIG REQUIRED) # OpenEXR::OpenEXR (image_exr.cpp)
 add_library(clayfit_image STATIC image_io.cpp image_codec.c image_oiio.cpp image_exr_check.c image_check.c colour.c envmap.c
-            jpeg_coding.c light_probe.c)
+            jpeg_coding.c light_probe.c image_exr.cpp)
 target_link_libraries(clayfit_image PUBLIC clayfit_core
-                      PRIVATE OpenImageIO::OpenImageIO clayfit_warnings m)
+                      PRIVATE OpenImageIO::OpenImageIO OpenEXR::OpenEXR clayfit_warnings m)
