@@ -6,7 +6,7 @@
 # start (docs/images.md).
 find_package(PNG REQUIRED)
 find_package(JPEG REQUIRED)
-find_package(OpenEXR CONFIG REQUIRED)
+find_package(OpenEXR 3.1 CONFIG REQUIRED)
 add_library(clayfit_image STATIC image_io.c image_codec.c image_png.c image_pfm.c image_jpeg.c
             image_exif.c image_exr.cpp image_exr_check.c image_check.c colour.c envmap.c
             jpeg_coding.c light_probe.c)
