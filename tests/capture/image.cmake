@@ -9,3 +9,8 @@ clayfit_c_test(test_envmap SOURCES capture/test_envmap.c LIBS clayfit_image LABE
 # a JPEG's coding from its markers, the in-memory round trip, damaged headers
 clayfit_c_test(test_jpeg_coding SOURCES capture/test_jpeg_coding.c LIBS clayfit_image
                LABELS capture)
+# the JPEG codec and EXIF against OpenImageIO: decoding, encoding, the
+# round trip, hostile files (libjpeg writes the progressive and CMYK ones)
+find_package(JPEG REQUIRED)
+clayfit_c_test(test_image_jpeg SOURCES capture/test_image_jpeg.c LIBS clayfit_image JPEG::JPEG
+               LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
