@@ -62,11 +62,11 @@ static size_t value_at(const exif_reader *r, size_t entry, uint32_t count, int i
 
 /* A field's first value as OpenImageIO 2.4 reads it (exif.cpp,
  * add_exif_item_to_spec, by the field's own type whatever the tag's, then
- * ImageSpec::get_float_attribute): SHORT, LONG, or (S)RATIONAL as (float)((double)num / (double)den). The fit multiplies
- * exposures made of these floats, so they must be the same floats; a
- * zero denominator gives inf or NaN, which the caller refuses. 0 (and no
- * value, as OpenImageIO sets none) for another type or a value outside
- * the block. */
+ * ImageSpec::get_float_attribute): SHORT, LONG, or (S)RATIONAL as
+ * (float)((double)num / (double)den). The fit multiplies exposures made
+ * of these floats, so they must be the same floats; a zero denominator
+ * gives inf or NaN, which the caller refuses. 0 (and no value, as
+ * OpenImageIO sets none) for another type or a value outside the block. */
 static int first_value(const exif_reader *r, size_t entry, uint32_t type, uint32_t count,
                        double *value) {
   /* a BYTE gives OpenImageIO 2.4.7 no value (tests/capture/test_image_jpeg.c) */

@@ -73,8 +73,8 @@ static void failure_init(jpeg_failure *f) {
 static cf_status failure_status(const jpeg_failure *f, const char *what, const char *doing,
                                 cf_error *err) {
   if (f->out_of_memory)
-    return cf_error_set(err, CF_ENOMEM, "%s: out of memory while %s it (libjpeg: %s)", what,
-                        doing, f->message);
+    return cf_error_set(err, CF_ENOMEM, "%s: out of memory while %s it (libjpeg: %s)", what, doing,
+                        f->message);
   return cf_error_set(err, CF_EIO, "%s: %s failed: libjpeg: %s", what, doing, f->message);
 }
 
@@ -291,8 +291,7 @@ static void memory_dest(jpeg_writing *w) {
  * blue 0 and 4 as RGB without alpha (JFIF holds 1 or 3); the quality with
  * force_baseline; the chroma's sampling factors (JPEG_444_COMP and its
  * siblings in jpeg_pvt.h). */
-static void set_parameters(j_compress_ptr c, const cf_image *image, int quality,
-                           cf_chroma chroma) {
+static void set_parameters(j_compress_ptr c, const cf_image *image, int quality, cf_chroma chroma) {
   c->image_width = (JDIMENSION)image->width;
   c->image_height = (JDIMENSION)image->height;
   c->input_components = image->channels == 1 ? 1 : 3;
@@ -354,8 +353,8 @@ cf_status image_jpeg_write(const char *path, const cf_image *image, int quality,
   cf_status s = encode_to_memory(&writing, image, quality, chroma, info, path, err);
   if (s == CF_OK) {
     FILE *file = fopen(path, "wb");
-    int ok = file && fwrite(writing.memory.bytes, 1, writing.memory.size, file) ==
-                         writing.memory.size;
+    int ok =
+        file && fwrite(writing.memory.bytes, 1, writing.memory.size, file) == writing.memory.size;
     if (file) ok = fclose(file) == 0 && ok;
     if (!ok) {
       s = cf_error_set(err, CF_EIO, "%s: cannot write the JPEG file", path);
@@ -391,8 +390,10 @@ cf_status image_jpeg_roundtrip(const cf_image *in, int quality, cf_chroma chroma
   jpeg_writing writing;
   writing_begin(&writing);
   cf_status s = encode_to_memory(&writing, in, quality, chroma, NULL, "a JPEG round trip", err);
-  if (s == CF_OK) s = decode_memory(writing.memory.bytes, writing.memory.size, out, err);
-  else *out = (cf_image){0};
+  if (s == CF_OK)
+    s = decode_memory(writing.memory.bytes, writing.memory.size, out, err);
+  else
+    *out = (cf_image){0};
   writing_end(&writing);
   return s;
 }

@@ -95,8 +95,8 @@ static cf_status ours_read(const char *path, int width, int height, cf_image_hea
     return cf_error_set(err, CF_EIO, "%s: cannot open", path);
   }
   info_clear(&header->info);
-  cf_status s = image_jpeg_read(path, file, (long long)st.st_size, width, height, header, image,
-                                err);
+  cf_status s =
+      image_jpeg_read(path, file, (long long)st.st_size, width, height, header, image, err);
   fclose(file);
   return s;
 }
@@ -128,11 +128,11 @@ static int read_both_equal(const char *path, const char *label) {
 /* ---- files written with libjpeg itself ---- */
 
 typedef struct libjpeg_file {
-  int progressive;                /* jpeg_simple_progression */
-  J_COLOR_SPACE in, stored;       /* JCS_CMYK with JCS_CMYK or JCS_YCCK */
-  const jpeg_scan_info *scans;    /* a scan script of its own */
+  int progressive;             /* jpeg_simple_progression */
+  J_COLOR_SPACE in, stored;    /* JCS_CMYK with JCS_CMYK or JCS_YCCK */
+  const jpeg_scan_info *scans; /* a scan script of its own */
   int scan_count;
-  const unsigned char *app1;      /* an APP1 segment's body */
+  const unsigned char *app1; /* an APP1 segment's body */
   unsigned app1_size;
 } libjpeg_file;
 
@@ -185,8 +185,7 @@ static void test_decoding(void) {
           cf_image image = picture(sizes[s][0], sizes[s][1], channels, (unsigned)(q * 7 + k));
           const char *path = path_of("decode.jpg");
           cf_error err = {0};
-          CHECK(image_oiio_write(path, &image, 8, NULL, kQualities[q], kChromas[k], &err) ==
-                    CF_OK,
+          CHECK(image_oiio_write(path, &image, 8, NULL, kQualities[q], kChromas[k], &err) == CF_OK,
                 "%s", err.message);
           char label[96];
           snprintf(label, sizeof label, "%dx%dx%d q%d %s", sizes[s][0], sizes[s][1], channels,
@@ -267,8 +266,7 @@ static void test_encoding(void) {
   }
   printf("encoding (1-4 channels x 4 qualities x 3 chromas, decoded): %d of %d identical\n",
          encoded, cases);
-  printf("round trip in memory vs image_oiio_jpeg_roundtrip: %d of %d identical\n", round,
-         12 + 12);
+  printf("round trip in memory vs image_oiio_jpeg_roundtrip: %d of %d identical\n", round, 12 + 12);
 }
 
 /* ---- EXIF ---- */
@@ -277,8 +275,8 @@ static void test_encoding(void) {
  * float OpenImageIO reads (exact for 1/64 and 0.5, which OpenImageIO's own
  * writer turns into infinity). */
 static void test_exif_values(void) {
-  static const double times[] = {1.0 / 125, 1.0 / 64, 0.5, 1.0 / 50, 30.0,     1.0 / 8000,
-                                 1.0 / 3,   2.5,      1.0 / 80, 1e-9, 4000.0, 1.0 / 3000};
+  static const double times[] = {1.0 / 125, 1.0 / 64, 0.5,      1.0 / 50, 30.0,   1.0 / 8000,
+                                 1.0 / 3,   2.5,      1.0 / 80, 1e-9,     4000.0, 1.0 / 3000};
   static const double fs[] = {5.6, 2.8, 1.4, 22.0, 4.0, 7.1};
   static const double isos[] = {100, 400, 12800, 50, 204800, 3};
   int checked = 0;
@@ -407,16 +405,16 @@ static void test_exif_malformed(void) {
   for (int variant = 0; variant < 7; ++variant) {
     tiff_block t = block_base(0);
     size_t size = sizeof t.b;
-    if (variant == 0) put(&t, 4, 0xfffffff0u, 4);                  /* IFD0 far outside */
-    if (variant == 1) put(&t, 8, 1, 2), entry(&t, 10, 0x829A, 5, 1, 0xfffffffcu); /* value out */
+    if (variant == 0) put(&t, 4, 0xfffffff0u, 4); /* IFD0 far outside */
+    if (variant == 1) put(&t, 8, 1, 2), entry(&t, 10, 0x829A, 5, 1, 0xfffffffcu);   /* value out */
     if (variant == 2) put(&t, 8, 1, 2), entry(&t, 10, 0x829A, 5, 0x40000000u, 100); /* huge count */
     if (variant == 3) { /* IFD0 and the SubIFD pointing at each other, and at themselves */
       put(&t, 8, 2, 2), entry(&t, 10, 0x8769, 4, 1, 40), entry(&t, 22, 0x8769, 4, 1, 8);
       put(&t, 40, 2, 2), entry(&t, 42, 0x8769, 4, 1, 8), entry(&t, 54, 0xA005, 4, 1, 40);
     }
-    if (variant == 4) put(&t, 8, 0xffff, 2);                        /* 65535 entries */
+    if (variant == 4) put(&t, 8, 0xffff, 2);                              /* 65535 entries */
     if (variant == 5) put(&t, 8, 1, 2), entry(&t, 10, 0x8769, 4, 1, 159); /* SubIFD at the end */
-    if (variant == 6) size = 7;                                     /* shorter than a header */
+    if (variant == 6) size = 7; /* shorter than a header */
     cf_image_info info;
     info_clear(&info);
     image_exif_read(t.b, size, &info);
@@ -472,8 +470,7 @@ static void test_hostile(void) {
   cf_image image = picture(64, 48, 3, 9);
   const char *good = path_of("good.jpg"), *bad = path_of("bad.jpg");
   cf_error err = {0};
-  CHECK(image_jpeg_write(good, &image, 90, CF_CHROMA_420, NULL, &err) == CF_OK, "%s",
-        err.message);
+  CHECK(image_jpeg_write(good, &image, 90, CF_CHROMA_420, NULL, &err) == CF_OK, "%s", err.message);
   size_t size;
   unsigned char *bytes = file_bytes(good, &size), *copy = malloc(size + 64);
   const size_t scan = scan_start(bytes, size);
@@ -544,9 +541,10 @@ static void test_scans(void) {
   cf_image out = {0};
   cf_error err = {0};
   cf_status s = ours_read(path, 0, 0, &h, &out, &err);
-  printf("a 1024 x 768 file of %d scans: plain libjpeg decodes it in %.0f ms; ours: %s in %.0f "
-         "ms\n",
-         n, 1e3 * plain, err.message + strlen(path) + 2, 1e3 * (now() - t0));
+  printf(
+      "a 1024 x 768 file of %d scans: plain libjpeg decodes it in %.0f ms; ours: %s in %.0f "
+      "ms\n",
+      n, 1e3 * plain, err.message + strlen(path) + 2, 1e3 * (now() - t0));
   CHECK(s == CF_EIO && !out.pixels, "%d scans were decoded", n);
   cf_image_free(&image);
 }
