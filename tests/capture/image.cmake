@@ -16,3 +16,8 @@ find_package(OpenEXR 3.1 CONFIG REQUIRED)
 clayfit_c_test(test_image_exr SOURCES capture/test_image_exr.c capture/exr_fixtures.cpp
                LIBS clayfit_image_oiio OpenEXR::OpenEXR LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
 target_include_directories(test_image_exr PRIVATE ${PROJECT_SOURCE_DIR}/src)
+# the JPEG codec and EXIF against OpenImageIO: decoding, encoding, the
+# round trip, hostile files (libjpeg writes the progressive and CMYK ones)
+find_package(JPEG REQUIRED)
+clayfit_c_test(test_image_jpeg SOURCES capture/test_image_jpeg.c LIBS clayfit_image_oiio JPEG::JPEG
+               LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
