@@ -20,6 +20,7 @@ packages=(
   libjansson-dev                     # JSON (CLI output, capture files)
   libceres-dev                       # fitting (and ceres::Jet in the tests)
   libopenimageio-dev                 # every image read and written
+  libpng-dev                         # PNG read and written (src/capture/image_png.c)
   libopencv-core-dev libopencv-imgproc-dev  # image analysis (sphere detection; cmake/FindOpenCV.cmake)
   libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
 )

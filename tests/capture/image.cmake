@@ -9,3 +9,8 @@ clayfit_c_test(test_envmap SOURCES capture/test_envmap.c LIBS clayfit_image LABE
 # a JPEG's coding from its markers, the in-memory round trip, damaged headers
 clayfit_c_test(test_jpeg_coding SOURCES capture/test_jpeg_coding.c LIBS clayfit_image
                LABELS capture)
+# the PNG codec against OpenImageIO: made, written and real PNGs bit for
+# bit, quantisation, damaged and hostile files, speed (printed)
+find_package(PNG REQUIRED)
+clayfit_c_test(test_image_png SOURCES capture/test_image_png.c capture/test_image_png_make.c
+               LIBS clayfit_image PNG::PNG LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
