@@ -14,3 +14,7 @@ clayfit_c_test(test_jpeg_coding SOURCES capture/test_jpeg_coding.c LIBS clayfit_
 find_package(PNG REQUIRED)
 clayfit_c_test(test_image_png SOURCES capture/test_image_png.c capture/test_image_png_make.c
                LIBS clayfit_image PNG::PNG LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
+# the PFM codec against OpenImageIO: made and real PFMs bit for bit, both
+# byte orders, damaged headers and data
+clayfit_c_test(test_image_pfm SOURCES capture/test_image_pfm.c LIBS clayfit_image LABELS capture
+               ARGS ${CLAYFIT_SHARED_DATA})
