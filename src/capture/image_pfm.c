@@ -88,8 +88,8 @@ static int parse_scale(cursor *c, float *value) {
 }
 
 /* The header from the file's first bytes. */
-static cf_status parse_header(const char *path, const char *bytes, size_t count,
-                              pfm_header *header, cf_error *err) {
+static cf_status parse_header(const char *path, const char *bytes, size_t count, pfm_header *header,
+                              cf_error *err) {
   if (count < 3 || bytes[0] != 'P' || (bytes[1] != 'F' && bytes[1] != 'f') || !is_blank(bytes[2]))
     return cf_error_set(err, CF_EPARSE, "%s: not a PFM file (it starts with neither PF nor Pf)",
                         path);
@@ -112,10 +112,10 @@ static void unpack_row(const unsigned char *in, size_t count, int little_endian,
   const float factor = fabsf(scale);
   for (size_t i = 0; i < count; ++i) {
     const unsigned char *b = in + 4 * i;
-    const uint32_t bits = little_endian ? (uint32_t)b[0] | (uint32_t)b[1] << 8 |
-                                              (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24
-                                        : (uint32_t)b[3] | (uint32_t)b[2] << 8 |
-                                              (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
+    const uint32_t bits =
+        little_endian
+            ? (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24
+            : (uint32_t)b[3] | (uint32_t)b[2] << 8 | (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
     float value;
     memcpy(&value, &bits, sizeof value);
     out[i] = factor * value;
@@ -123,8 +123,8 @@ static void unpack_row(const unsigned char *in, size_t count, int little_endian,
 }
 
 /* The rows, bottom first in the file, into image top first. */
-static cf_status read_rows(const char *path, FILE *file, const pfm_header *header,
-                           cf_image *image, cf_error *err) {
+static cf_status read_rows(const char *path, FILE *file, const pfm_header *header, cf_image *image,
+                           cf_error *err) {
   const size_t row_values = (size_t)header->width * (size_t)header->channels;
   unsigned char *row = malloc(row_values * 4);
   if (!row) return cf_error_set(err, CF_ENOMEM, "%s: out of memory while decoding it", path);

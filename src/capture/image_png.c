@@ -10,10 +10,11 @@
  * or sBIT transform (libpng applies none unless asked). The channel count
  * is png_get_channels after those transforms. EXIF comes, as in
  * OpenImageIO 2.4, from "Raw profile type exif" text chunks (hex, the way
- * ImageMagick and exiftool store it) and then from an eXIf chunk, both
- * before the image data. An oFFs chunk is ignored: OpenImageIO 2.4 makes
- * it the data window's origin (which image_oiio_read then refuses as a
- * partial image); the pixels are the whole image either way.
+ * ImageMagick and exiftool store it) over an eXIf chunk, both before
+ * the image data. An oFFs chunk (a position on a page) is
+ * ignored: OpenImageIO 2.4 makes a non-zero one the data window's origin,
+ * which image_oiio_read refuses as a partial image, but the file holds
+ * the whole image (test_image_png: "oFFs 5 7").
  *
  * Hostile files: libpng's own limits stay as Debian builds them (an
  * ancillary chunk of more than 8,000,000 bytes is an error, as it is for
@@ -156,8 +157,14 @@ static int key_is(const char *key, const char *name) { /* Strutil::iequals */
   return *key == *name;
 }
 
-/* What the chunks before the image data say of the exposure. */
+/* What the chunks before the image data say of the exposure: the eXIf
+ * chunk, then the text chunks in file order, each over the last (the
+ * order OpenImageIO 2.4.7 gives them, measured: test_image_png "both
+ * EXIF"). */
 static void exif_read(png_structp png, png_infop info_png, cf_image_info *info) {
+  png_uint_32 size = 0;
+  png_bytep exif = NULL;
+  if (png_get_eXIf_1(png, info_png, &size, &exif) && exif) exif_block(exif, size, info);
   png_textp text = NULL;
   int count = png_get_text(png, info_png, &text, NULL);
   for (int i = 0; i < count; ++i)
@@ -166,9 +173,6 @@ static void exif_read(png_structp png, png_infop info_png, cf_image_info *info) 
                      text[i].compression >= PNG_ITXT_COMPRESSION_NONE ? text[i].itxt_length
                                                                       : text[i].text_length,
                      info);
-  png_uint_32 size = 0;
-  png_bytep exif = NULL;
-  if (png_get_eXIf_1(png, info_png, &size, &exif) && exif) exif_block(exif, size, info);
 }
 
 /* ---- reading ---- */
@@ -182,7 +186,7 @@ static int read_header(png_structp png, png_infop info, png_uint_32 *width, png_
   png_set_expand(png);
   const uint16_t probe = 1;
   if (*(const unsigned char *)&probe == 1) png_set_swap(png); /* samples in host order */
-  png_set_interlace_handling(png);                             /* png_read_image's passes */
+  png_set_interlace_handling(png);                            /* png_read_image's passes */
   png_read_update_info(png, info);
   int colour, interlace;
   png_get_IHDR(png, info, width, height, bits, &colour, &interlace, NULL, NULL);
@@ -217,9 +221,9 @@ static cf_status read_pixels(const char *path, png_structp png, png_infop info,
   for (int y = 0; y < image->height; ++y) rows[y] = stored + (size_t)y * row_bytes;
   cf_status status = CF_OK;
   if (read_rows(png, rows) != 0)
-    status = cf_error_set(err, CF_EIO, "%s: a corrupt or truncated PNG: %s%s", path,
-                          session->message,
-                          session->over_budget ? " (over clayfit's 64 MiB for libpng)" : "");
+    status =
+        cf_error_set(err, CF_EIO, "%s: a corrupt or truncated PNG: %s%s", path, session->message,
+                     session->over_budget ? " (over clayfit's 64 MiB for libpng)" : "");
   else if (bits == 16)
     image_scale_u16((const uint16_t *)(const void *)stored, row_values * (size_t)image->height,
                     image->pixels);
@@ -231,9 +235,9 @@ static cf_status read_pixels(const char *path, png_structp png, png_infop info,
 }
 
 /* image_png_read's body, with libpng's structures made. */
-static cf_status read_png(const char *path, png_structp png, png_infop info,
-                          png_session *session, int width, int height,
-                          cf_image_header *header, cf_image *image, cf_error *err) {
+static cf_status read_png(const char *path, png_structp png, png_infop info, png_session *session,
+                          int width, int height, cf_image_header *header, cf_image *image,
+                          cf_error *err) {
   png_uint_32 w = 0, h = 0;
   int channels = 0, bits = 0;
   if (read_header(png, info, &w, &h, &channels, &bits) != 0)
@@ -262,8 +266,8 @@ cf_status image_png_read(const char *path, FILE *file, long long size, int width
                          cf_image_header *header, cf_image *image, cf_error *err) {
   (void)size; /* the dispatcher walked the chunks against it */
   png_session session = {0};
-  png_structp png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &session, on_error,
-                                             on_warning, &session, budget_malloc, budget_free);
+  png_structp png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &session, on_error, on_warning,
+                                             &session, budget_malloc, budget_free);
   png_infop info = png ? png_create_info_struct(png) : NULL;
   if (!info) {
     png_destroy_read_struct(png ? &png : NULL, NULL, NULL);
@@ -293,10 +297,10 @@ static void quantise_row(const float *values, size_t count, int bits, unsigned c
 }
 
 /* The whole file through libpng into `file`; 0 or libpng's longjmp. */
-static int write_rows(png_structp png, png_infop info, FILE *file, const cf_image *image,
-                      int bits, unsigned char *row) {
-  static const int colour[4] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
-                                PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
+static int write_rows(png_structp png, png_infop info, FILE *file, const cf_image *image, int bits,
+                      unsigned char *row) {
+  static const int colour[4] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                                PNG_COLOR_TYPE_RGB_ALPHA};
   if (setjmp(png_jmpbuf(png))) return -1;
   png_init_io(png, file);
   png_set_compression_level(png, WRITE_LEVEL);

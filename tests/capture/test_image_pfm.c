@@ -34,8 +34,8 @@ static cf_status pfm_read(const char *path, int width, int height, cf_image_head
     if (file) fclose(file);
     return cf_error_set(err, CF_EIO, "%s: cannot open", path);
   }
-  cf_status s = image_pfm_read(path, file, (long long)st.st_size, width, height, header, image,
-                               err);
+  cf_status s =
+      image_pfm_read(path, file, (long long)st.st_size, width, height, header, image, err);
   fclose(file);
   return s;
 }
@@ -85,8 +85,7 @@ static const char *make_pfm(const char *name, const char *header, int width, int
     unsigned char b[4];
     uint32_t bits;
     memcpy(&bits, &v, 4);
-    for (int k = 0; k < 4; ++k)
-      b[big_endian ? 3 - k : k] = (unsigned char)(bits >> (8 * k));
+    for (int k = 0; k < 4; ++k) b[big_endian ? 3 - k : k] = (unsigned char)(bits >> (8 * k));
     fwrite(b, 1, 4, f);
   }
   for (size_t i = 0; i < extra; ++i) fputc('\n', f);
@@ -100,7 +99,8 @@ static void made_cases(void) {
   compare_readers(make_pfm("b.pfm", "Pf\n7 5\n-1.0\n", 7, 5, 1, 0, 0), "Pf little-endian");
   compare_readers(make_pfm("c.pfm", "PF\n7 5\n1.0\n", 7, 5, 3, 1, 0), "PF big-endian");
   compare_readers(make_pfm("d.pfm", "PF 7 5 -2.5\n", 7, 5, 3, 0, 0), "PF scale -2.5, one line");
-  compare_readers(make_pfm("e.pfm", "Pf\n7 5\n0.125\n", 7, 5, 1, 1, 0), "Pf big-endian scale 0.125");
+  compare_readers(make_pfm("e.pfm", "Pf\n7 5\n0.125\n", 7, 5, 1, 1, 0),
+                  "Pf big-endian scale 0.125");
   compare_readers(make_pfm("f.pfm", "PF\n# made\n7\t5 # here\n-1\r", 7, 5, 3, 0, 0),
                   "comments, tab, CR before the data");
   compare_readers(make_pfm("g.pfm", "PF\n7 5\n-1.0\n", 7, 5, 3, 0, 3), "3 bytes after the rows");
@@ -161,8 +161,8 @@ static void error_cases(void) {
   cf_image_header h;
   cf_image image = {0};
   cf_error err = {0};
-  CHECK(pfm_read(path, 5, 7, &h, &image, &err) == CF_EINVAL && !image.pixels,
-        "5 x 7 expected: %s", err.message);
+  CHECK(pfm_read(path, 5, 7, &h, &image, &err) == CF_EINVAL && !image.pixels, "5 x 7 expected: %s",
+        err.message);
   printf("  %-36s %-8s %s\n", "5 x 7 expected", "EINVAL", err.message);
 }
 

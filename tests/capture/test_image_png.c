@@ -25,6 +25,19 @@
 
 CHECK_MAIN_STATE;
 
+/* AddressSanitizer keeps freed blocks (its quarantine, 256 MB): the peak
+ * memory says nothing about what libpng held there. */
+#if defined(__SANITIZE_ADDRESS__)
+#define PEAK_MEANINGFUL 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PEAK_MEANINGFUL 0
+#endif
+#endif
+#ifndef PEAK_MEANINGFUL
+#define PEAK_MEANINGFUL 1
+#endif
+
 static char folder[256];
 static int exif_available; /* image_exif_read reads EXIF (image_exif.c merged) */
 
@@ -63,8 +76,8 @@ static cf_status png_read(const char *path, int width, int height, cf_image_head
     if (file) fclose(file);
     return cf_error_set(err, CF_EIO, "%s: cannot open", path);
   }
-  cf_status s = image_png_read(path, file, (long long)st.st_size, width, height, header, image,
-                               err);
+  cf_status s =
+      image_png_read(path, file, (long long)st.st_size, width, height, header, image, err);
   fclose(file);
   return s;
 }
@@ -105,12 +118,11 @@ static int compare_readers(const char *path, const char *label) {
           b.channels, b.info.format, b.info.bits_per_sample);
     CHECK(pixels_equal, "%s: pixels differ", label);
     CHECK(exif_equal || !exif_available, "%s: EXIF %g %g %g vs %g %g %g", label,
-          a.info.exposure_time, a.info.f_number, a.info.iso, b.info.exposure_time,
-          b.info.f_number, b.info.iso);
+          a.info.exposure_time, a.info.f_number, a.info.iso, b.info.exposure_time, b.info.f_number,
+          b.info.iso);
     equal = header_equal && pixels_equal && (exif_equal || !exif_available);
     printf("  %-34s %4d x %-4d x %d %2d bits  exposure %-8.4g %s\n", label, a.width, a.height,
-           a.channels, a.info.bits_per_sample, b.info.exposure_time,
-           equal ? "equal" : "DIFFERENT");
+           a.channels, a.info.bits_per_sample, b.info.exposure_time, equal ? "equal" : "DIFFERENT");
   }
   cf_image_free(&ia);
   cf_image_free(&ib);
@@ -169,7 +181,7 @@ static void libpng_cases(void) {
       {"oFFs 0 0 (as OpenImageIO writes)", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0, MADE_OFFS_ZERO},
       {"eXIf chunk", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0, MADE_EXIF_CHUNK},
       {"zTXt Raw profile type exif", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0, MADE_EXIF_TEXT},
-      {"both EXIF (eXIf wins)", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0,
+      {"both EXIF (the text wins)", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0,
        MADE_EXIF_TEXT | MADE_EXIF_CHUNK},
   };
   printf("PNGs made with libpng:\n");
@@ -182,15 +194,41 @@ static void libpng_cases(void) {
   printf("  %d of %d equal\n", equal, total);
 }
 
+/* oFFs 5 7: OpenImageIO 2.4 makes it the data window's origin, which
+ * image_oiio_read refuses as a partial image; image_png_read reads the
+ * whole image, the pixels of the same file without the chunk. */
+static void offset_case(void) {
+  const png_made with = {"oFFs 5 7", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0, MADE_OFFS};
+  const png_made without = {"no oFFs", 29, 17, 8, PNG_COLOR_TYPE_RGB, 0, 0, 0};
+  const char *a = temp_path("offset.png"), *b = temp_path("no_offset.png");
+  png_make(a, &with);
+  png_make(b, &without);
+  cf_image_header h1, h2;
+  cf_image ia = {0}, ib = {0};
+  cf_error err = {0};
+  CHECK(png_read(a, 0, 0, &h1, &ia, &err) == CF_OK, "oFFs 5 7: %s", err.message);
+  CHECK(oiio_read(b, &h2, &ib, &err) == CF_OK, "%s", err.message);
+  int equal =
+      ia.pixels && ib.pixels && memcmp(ia.pixels, ib.pixels, sizeof(float) * 29 * 17 * 3) == 0;
+  CHECK(equal, "oFFs 5 7: other pixels than the file without it");
+  cf_image_header h3;
+  cf_status theirs = oiio_read(a, &h3, NULL, &err);
+  printf("  %-34s read whole here (%s); image_oiio_read: %s\n", "oFFs 5 7",
+         equal ? "equal" : "DIFFERENT", theirs == CF_OK ? "read" : cf_status_name(theirs));
+  cf_image_free(&ia);
+  cf_image_free(&ib);
+}
+
 /* An image with every kind of value: a gradient, out of range, not
  * finite (OpenImageIO's quantisation of 0x1.0101p-9 depends on the
  * value's place, see quantisation_sweep: left out here). */
 static void fill_test_image(cf_image *image) {
-  static const float special[] = {-0.5f, -0.0f, 1.5f, 1e30f, NAN, INFINITY, -INFINITY,
-                                  0.5f / 65535.0f, 254.5f / 255.0f, 1.0f};
+  static const float special[] = {
+      -0.5f, -0.0f, 1.5f, 1e30f, NAN, INFINITY, -INFINITY, 0.5f / 65535.0f, 254.5f / 255.0f, 1.0f};
   size_t n = (size_t)image->width * image->height * image->channels;
   for (size_t i = 0; i < n; ++i)
-    image->pixels[i] = i % 7 == 3 ? special[(i / 7) % 10] : (float)((i * 2654435761u) % 100003) / 100002.0f;
+    image->pixels[i] =
+        i % 7 == 3 ? special[(i / 7) % 10] : (float)((i * 2654435761u) % 100003) / 100002.0f;
 }
 
 /* PNGs from image_oiio_write, and ours against it. */
@@ -213,7 +251,8 @@ static void writer_cases(void) {
       compare_readers(ours, label);
       cf_image_header h1, h2;
       cf_image a = {0}, b = {0};
-      CHECK(png_read(ours, 0, 0, &h1, &a, &err) == CF_OK && png_read(theirs, 0, 0, &h2, &b, &err) == CF_OK,
+      CHECK(png_read(ours, 0, 0, &h1, &a, &err) == CF_OK &&
+                png_read(theirs, 0, 0, &h2, &b, &err) == CF_OK,
             "%s", err.message);
       CHECK(a.pixels && b.pixels &&
                 memcmp(a.pixels, b.pixels, sizeof(float) * 37 * 23 * (size_t)channels) == 0,
@@ -235,9 +274,9 @@ static size_t sweep_values(int bits, float *out) {
                            half,  nextafterf(half, -1.0f),  nextafterf(half, 2.0f)};
     for (int i = 0; i < 6; ++i) out[n++] = list[i];
   }
-  static const float special[] = {-0.0f,    -1e-9f,   -0.5f,      -1.0f,   1.0000001f,
-                                  1.5f,     1e30f,    -1e30f,     NAN,     -NAN,
-                                  INFINITY, -INFINITY, 0x1.0101p-9f, 0x1.0000fep-17f};
+  static const float special[] = {-0.0f,        -1e-9f,         -0.5f, -1.0f, 1.0000001f, 1.5f,
+                                  1e30f,        -1e30f,         NAN,   -NAN,  INFINITY,   -INFINITY,
+                                  0x1.0101p-9f, 0x1.0000fep-17f};
   for (size_t i = 0; i < sizeof special / sizeof special[0]; ++i) out[n++] = special[i];
   return n;
 }
@@ -287,9 +326,10 @@ static void quantisation_sweep(void) {
         CHECK(0, "%d bits: %a stored as %.9g by OpenImageIO, %.9g here", bits, values[i],
               back.pixels[i] * (bits == 8 ? 255.0 : 65535.0), ours * (bits == 8 ? 255.0 : 65535.0));
       }
-      printf("  %2d bits, %4d x %d per row: %zu values, %zu differ, %zu of 0x1.0101p-9 stored "
-             "as 1 by OpenImageIO (0 here)\n",
-             bits, w, c, n, differ, ambiguous);
+      printf(
+          "  %2d bits, %4d x %d per row: %zu values, %zu differ, %zu of 0x1.0101p-9 stored "
+          "as 1 by OpenImageIO (0 here)\n",
+          bits, w, c, n, differ, ambiguous);
       cf_image_free(&image);
       cf_image_free(&back);
     }
@@ -378,8 +418,8 @@ static void ihdr_huge(unsigned char *bytes, size_t *size) {
 
 static void error_cases(void) {
   printf("damaged PNGs:\n");
-  const png_made base = {"RGB 8-bit, tEXt", 61, 40, 8, PNG_COLOR_TYPE_RGB, 0, 0,
-                         MADE_COLOUR_CHUNKS};
+  const png_made base = {"RGB 8-bit, tEXt",  61, 40, 8,
+                         PNG_COLOR_TYPE_RGB, 0,  0,  MADE_COLOUR_CHUNKS};
   const char *source = temp_path("base.png");
   png_make(source, &base);
   CHECK(read_damaged(source, cut_after_ihdr, "truncated after the IHDR") == CF_EIO, "truncated");
@@ -434,7 +474,8 @@ static void hostile_text_chunks(void) {
   long grown = peak_kib() - before;
   CHECK(s == CF_OK, "text bombs: %s", err.message);
   CHECK(printed == 0, "text bombs: %ld bytes on stderr", printed);
-  CHECK(grown < 100 * 1024, "text bombs: the peak memory grew by %ld KiB", grown);
+  CHECK(grown < 100 * 1024 || !PEAK_MEANINGFUL, "text bombs: the peak memory grew by %ld KiB",
+        grown);
   CHECK(png_read(plain, 0, 0, &h2, &b, &err) == CF_OK && a.pixels &&
             memcmp(a.pixels, b.pixels, sizeof(float) * 29 * 17 * 3) == 0,
         "text bombs: other pixels");
@@ -471,7 +512,8 @@ static void speed(const char *data) {
   size_t n = (size_t)first.width * first.height * 3;
   cf_image srgb = first;
   srgb.pixels = malloc(n * sizeof(float));
-  for (size_t i = 0; i < n; ++i) srgb.pixels[i] = (float)cf_linear_to_srgb(fmin(1.0, 8.0 * first.pixels[i]));
+  for (size_t i = 0; i < n; ++i)
+    srgb.pixels[i] = (float)cf_linear_to_srgb(fmin(1.0, 8.0 * first.pixels[i]));
   for (int bits = 8; bits <= 16; bits += 8) {
     const cf_image *image = bits == 8 ? &srgb : &first;
     const char *ours_path = temp_path("speed_ours.png"), *theirs_path = temp_path("speed_oiio.png");
@@ -480,14 +522,16 @@ static void speed(const char *data) {
     for (int r = 0; r < 3; ++r) image_png_write(ours_path, image, bits, NULL, &err);
     double t_ours = (now() - t) / 3;
     t = now();
-    for (int r = 0; r < 3; ++r) image_oiio_write(theirs_path, image, bits, NULL, 0, CF_CHROMA_444, &err);
+    for (int r = 0; r < 3; ++r)
+      image_oiio_write(theirs_path, image, bits, NULL, 0, CF_CHROMA_444, &err);
     double t_theirs = (now() - t) / 3;
     struct stat a, b;
     stat(ours_path, &a);
     stat(theirs_path, &b);
-    printf("speed: 612 x 512 RGB %2d-bit written in %.1f ms, %lld bytes (image_png_write); "
-           "%.1f ms, %lld bytes (image_oiio_write)\n",
-           bits, 1e3 * t_ours, (long long)a.st_size, 1e3 * t_theirs, (long long)b.st_size);
+    printf(
+        "speed: 612 x 512 RGB %2d-bit written in %.1f ms, %lld bytes (image_png_write); "
+        "%.1f ms, %lld bytes (image_oiio_write)\n",
+        bits, 1e3 * t_ours, (long long)a.st_size, 1e3 * t_theirs, (long long)b.st_size);
   }
   free(srgb.pixels);
   cf_image_free(&first);
@@ -504,10 +548,12 @@ int main(int argc, char **argv) {
   unsigned char block[84];
   image_exif_read(block, exif_block_make(block, 125), &probe);
   exif_available = !isnan(probe.exposure_time);
-  if (!exif_available) printf("EXIF: image_exif_read reads nothing yet; EXIF values not compared\n");
+  if (!exif_available)
+    printf("EXIF: image_exif_read reads nothing yet; EXIF values not compared\n");
 
   hostile_text_chunks(); /* first: it measures the peak memory */
   libpng_cases();
+  offset_case();
   writer_cases();
   quantisation_sweep();
   error_cases();

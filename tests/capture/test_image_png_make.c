@@ -32,12 +32,12 @@ size_t exif_block_make(unsigned char out[84], uint32_t denominator) {
   memset(out, 0, 84);
   memcpy(out, "II*\0", 4);
   put32(out + 4, 8);
-  put16(out + 8, 1);                       /* IFD0: one entry */
-  entry(out + 10, 0x8769, 4, 1, 26);       /* the Exif IFD at 26 */
-  put16(out + 26, 3);                      /* Exif IFD: three entries */
-  entry(out + 28, 0x829A, 5, 1, 68);       /* ExposureTime, RATIONAL at 68 */
-  entry(out + 40, 0x829D, 5, 1, 76);       /* FNumber, RATIONAL at 76 */
-  entry(out + 52, 0x8827, 3, 1, 200);      /* PhotographicSensitivity 200 */
+  put16(out + 8, 1);                  /* IFD0: one entry */
+  entry(out + 10, 0x8769, 4, 1, 26);  /* the Exif IFD at 26 */
+  put16(out + 26, 3);                 /* Exif IFD: three entries */
+  entry(out + 28, 0x829A, 5, 1, 68);  /* ExposureTime, RATIONAL at 68 */
+  entry(out + 40, 0x829D, 5, 1, 76);  /* FNumber, RATIONAL at 76 */
+  entry(out + 52, 0x8827, 3, 1, 200); /* PhotographicSensitivity 200 */
   put32(out + 68, 1);
   put32(out + 72, denominator);
   put32(out + 76, 28);
@@ -87,6 +87,7 @@ static void set_chunks(png_structp png, png_infop info, const png_made *m, char 
   }
   if (m->flags & MADE_SRGB) png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   if (m->flags & MADE_OFFS_ZERO) png_set_oFFs(png, info, 0, 0, PNG_OFFSET_PIXEL);
+  if (m->flags & MADE_OFFS) png_set_oFFs(png, info, 5, 7, PNG_OFFSET_PIXEL);
   png_text t[2];
   int n = 0;
   memset(t, 0, sizeof t);

@@ -11,7 +11,8 @@ enum {
   MADE_SRGB = 2,          /* sRGB (with libpng's gAMA and cHRM) */
   MADE_OFFS_ZERO = 4,     /* oFFs 0 0, as OpenImageIO writes */
   MADE_EXIF_CHUNK = 8,    /* eXIf: exposure 1/125 s, f/2.8, ISO 200 */
-  MADE_EXIF_TEXT = 16     /* zTXt "Raw profile type exif": 1/80 s, f/2.8, ISO 200 */
+  MADE_EXIF_TEXT = 16,    /* zTXt "Raw profile type exif": 1/80 s, f/2.8, ISO 200 */
+  MADE_OFFS = 32          /* oFFs 5 7 */
 };
 
 typedef struct png_made {
