@@ -21,3 +21,12 @@ target_include_directories(test_image_exr PRIVATE ${PROJECT_SOURCE_DIR}/src)
 find_package(JPEG REQUIRED)
 clayfit_c_test(test_image_jpeg SOURCES capture/test_image_jpeg.c LIBS clayfit_image_oiio JPEG::JPEG
                LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
+# the PNG codec against OpenImageIO: made, written and real PNGs bit for
+# bit, quantisation, damaged and hostile files, speed (printed)
+find_package(PNG REQUIRED)
+clayfit_c_test(test_image_png SOURCES capture/test_image_png.c capture/test_image_png_make.c
+               LIBS clayfit_image_oiio PNG::PNG LABELS capture ARGS ${CLAYFIT_SHARED_DATA})
+# the PFM codec against OpenImageIO: made and real PFMs bit for bit, both
+# byte orders, damaged headers and data
+clayfit_c_test(test_image_pfm SOURCES capture/test_image_pfm.c LIBS clayfit_image_oiio LABELS capture
+               ARGS ${CLAYFIT_SHARED_DATA})
