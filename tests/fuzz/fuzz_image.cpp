@@ -27,6 +27,7 @@
  * channels of a positive size. */
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 
 #include "clayfit/image.h"
