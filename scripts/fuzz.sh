@@ -6,8 +6,8 @@
 #   fuzz_capture_spec   capture files (the JSON, and the image list it names)
 #   fuzz_text           image lists, light directions and intensities
 #   fuzz_fit_file       fit.json, as export and report read it
-#   fuzz_image          images through OpenImageIO: PNG, EXR, TIFF, JPEG,
-#                       HDR, PFM (headers first, pixels of small ones)
+#   fuzz_image          images through clayfit's codecs: PNG, EXR, JPEG, PFM
+#                       (headers first, pixels of small ones)
 # Builds them into build/fuzz with clang (-fsanitize=fuzzer,address,
 # undefined; incremental), seeds each (build/fuzz/seeds/TARGET: clayfit's
 # own writers, tests/fuzz/seeds, the test fixtures, and the inputs that

@@ -19,12 +19,14 @@ packages=(
   g++ make cmake pkg-config          # compiler, build
   libjansson-dev                     # JSON (CLI output, capture files)
   libceres-dev                       # fitting (and ceres::Jet in the tests)
-  libopenimageio-dev                 # every image read and written
+  libpng-dev libjpeg62-turbo-dev     # PNG and JPEG read and written (src/capture/image_png.c, image_jpeg.c)
+  libopenexr-dev                     # OpenEXR read and written (src/capture/image_exr.cpp)
   libopencv-core-dev libopencv-imgproc-dev  # image analysis (sphere detection; cmake/FindOpenCV.cmake)
   libxxhash-dev                      # XXH3-128: clayfit batch's entry keys
 )
 # The tests' (and the benchmarks'): every real component a test runs.
 test_packages=(
+  libopenimageio-dev                 # OpenImageIO: every other format (TIFF, HDR, ...; the module libclayfit_oiio.so) and the codecs' reference in their tests
   openimageio-tools                  # oiiotool: images made and compared in the tests and scripts
   libopencv-imgcodecs-dev            # the DiLiGenT mask read in test_sphere_diligent
   colmap                             # camera poses (integration tests)

@@ -84,9 +84,13 @@ cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_e
  * `info` where they are finite (format, bits_per_sample and is_float are
  * ignored; info may be NULL). JPEG and TIFF keep them in EXIF, OpenEXR
  * as attributes; other formats may drop them. For synthetic captures and
- * tests. OpenImageIO 2.4's EXIF rationals: an exposure time that is a
- * power-of-two fraction (1/64 s, 0.5 s) comes back infinite and 1/50 s as
- * 0.019999 s; 1/80, 1/125, 1/40 s come back exact. */
+ * tests. EXIF values are read as the float nearest their rational
+ * (OpenImageIO's reading, which clayfit's JPEG reader keeps): 1/125 s
+ * comes back as 0.00800000038 s. A JPEG stores an exposure time 1/N s
+ * as exactly 1/N (1/64, 1/50, 0.5 s too) and other values to at least 9
+ * significant digits, so every value comes back as its float; a TIFF,
+ * written through OpenImageIO 2.4, turns a power-of-two fraction (1/64 s,
+ * 0.5 s) into infinity and 1/50 s into 0.019999 s. */
 cf_status cf_image_write_with_info(const char *path, const cf_image *image, int bits,
                                    const cf_image_info *info, cf_error *err);
 

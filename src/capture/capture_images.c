@@ -1,5 +1,5 @@
 /* Every image's pixels into observations (capture_internal.h): decoding a
- * file (OpenImageIO, the finite check, its mask) is the slow part and
+ * file (its codec, the finite check, its mask) is the slow part and
  * needs nothing from the others, so READERS parts of core's thread pool
  * decode ahead, at most AHEAD images beyond the one being added, while
  * one part adds each image's observations in order (they append to the

@@ -163,8 +163,9 @@ static cf_response synth_response(const cf_synth_options *o) {
 
 /* The EXIF settings exif_exposures cycles through: exposure time (s), ISO,
  * f-number; exposure time x ISO / f-number^2 spans a factor of 1.95. The
- * times are ones OpenImageIO 2.4's float-to-rational keeps exactly: it
- * writes 1/50 s as 0.019999 s and 1/64 s or 0.5 s as infinity. */
+ * times were chosen when OpenImageIO 2.4 wrote the EXIF (it wrote 1/50 s
+ * as 0.019999 s and 1/64 s as infinity); clayfit's writer (image_exif.c)
+ * keeps any 1/N s, and these stay so that the test captures do not move. */
 static const double exif_settings[][3] = {{1.0 / 80, 100, 4.0},
                                           {1.0 / 125, 200, 4.0},
                                           {1.0 / 40, 100, 4.5},

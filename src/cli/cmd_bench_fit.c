@@ -6,7 +6,8 @@
  * the Pareto front; the evaluator's floor; the scaling with the number of
  * observations. A benchmark prints numbers; it asserts nothing. Each run is
  * a child process, so that its peak memory is its own; so is every
- * rendering: the parent never starts OpenImageIO's thread pool, which a
+ * rendering: the parent never starts an image library's thread pool
+ * (OpenImageIO's, for a format clayfit does not read itself), which a
  * forked child would inherit without its threads (and hang). */
 #define _GNU_SOURCE /* wait4 */
 #include <getopt.h>

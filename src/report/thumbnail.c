@@ -285,7 +285,7 @@ cf_status cf_report_render_sphere(const cf_fit_result *result, const cf_sphere_v
 /* ---- the PNG ---- */
 
 /* Flush the written temporary to the disk before it is renamed into place
- * (OpenImageIO closes it but does not sync). */
+ * (the PNG writer closes it but does not sync). */
 static cf_status sync_file(const char *path, cf_error *err) {
   int fd = open(path, O_RDONLY);
   if (fd < 0) return cf_error_set(err, CF_EIO, "%s: cannot reopen: %s", path, strerror(errno));

@@ -2,7 +2,6 @@
 # bug (tests/fuzz/regressions/fuzz_TARGET), compiled normally: each is a test
 # here, in Release and under ASan+UBSan. scripts/fuzz.sh builds the same
 # targets with libFuzzer (tests/fuzz/fuzz.mk) and fuzzes them.
-find_package(OpenImageIO REQUIRED)
 set(FUZZ_DIR ${CMAKE_CURRENT_SOURCE_DIR}/fuzz)
 
 # clayfit_fuzz_inputs(target label source LIBS... DIRS...): the test
@@ -35,7 +34,7 @@ set(IMAGE_SEEDS ${CMAKE_CURRENT_BINARY_DIR}/fuzz_image_seeds)
 add_test(NAME fuzz_image_seeds COMMAND make_image_seeds ${IMAGE_SEEDS})
 set_tests_properties(fuzz_image_seeds PROPERTIES LABELS "capture;fuzz"
                      FIXTURES_SETUP fuzz_image_seeds)
-clayfit_fuzz_inputs(image capture fuzz_image.cpp LIBS clayfit_image OpenImageIO::OpenImageIO
+clayfit_fuzz_inputs(image capture fuzz_image.cpp LIBS clayfit_image
                     DIRS ${IMAGE_SEEDS})
 set_tests_properties(fuzz_inputs_image PROPERTIES FIXTURES_REQUIRED fuzz_image_seeds)
 

@@ -3,8 +3,8 @@
 #   make -f tests/fuzz/fuzz.mk -j N OUT=build/fuzz CC=clang CXX=clang++
 # clayfit's sources are compiled here with libFuzzer's coverage, ASan and
 # UBSan (their own CMake builds do not change), into OUT/obj, rebuilt when
-# a source or a header it includes changes. Jansson, OpenImageIO and the
-# image libraries under it are Debian's, linked uninstrumented.
+# a source or a header it includes changes. Jansson and the image
+# libraries (libpng, libjpeg, OpenEXR) are Debian's, linked uninstrumented.
 OUT ?= build/fuzz
 OBJ := $(OUT)/obj
 
@@ -13,9 +13,9 @@ SANITIZE := -fsanitize=address,undefined -fno-sanitize-recover=undefined
 INCLUDES := -Iinclude $(patsubst %,-I%,$(wildcard src/*/include)) -Isrc
 COMMON := -g -O1 -fno-omit-frame-pointer -Wall -Wextra -Werror $(INCLUDES) -MMD -MP
 CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L $(COMMON)
-CXXFLAGS := -std=c++17 $(COMMON)
+CXXFLAGS := -std=c++17 $(COMMON) $(shell pkg-config --cflags OpenEXR)
 INSTRUMENT := -fsanitize=fuzzer-no-link $(SANITIZE)
-LIBS := -Wl,--as-needed -lOpenImageIO -lOpenImageIO_Util -ljansson -lm
+LIBS := -Wl,--as-needed $(shell pkg-config --libs libpng OpenEXR) -ljpeg -ljansson -ldl -lm
 
 CORE := src/core/status.c src/core/file.c src/core/json_reader.c src/core/text_escape.c src/core/order_statistics.c
 # the model without its least-squares fits (tailed_ggx.c is clayfit_model_fit, on lsq and Ceres)
@@ -25,7 +25,9 @@ GRID := $(OUT)/gen/tailed_grid.c
 COLMAP := src/capture/camera_model.c src/capture/colmap_common.c src/capture/colmap_binary.c \
           src/capture/colmap_text.c src/capture/colmap_read.c
 COLMAP_WRITE := src/capture/colmap_write.c
-IMAGE := src/capture/image_io.cpp src/capture/image_exr_check.c src/capture/image_check.c \
+IMAGE := src/capture/image_io.c src/capture/image_codec.c src/capture/image_png.c \
+         src/capture/image_pfm.c src/capture/image_jpeg.c src/capture/image_exif.c \
+         src/capture/image_exr.cpp src/capture/image_exr_check.c src/capture/image_check.c \
          src/capture/colour.c src/capture/envmap.c src/capture/jpeg_coding.c
 CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
 FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c

@@ -1,22 +1,22 @@
 /* libFuzzer target for reading images (cf_image_read_header and
- * cf_image_read_sized, the OpenImageIO adapter src/capture/image_io.cpp;
+ * cf_image_read_sized: the dispatcher src/capture/image_io.c and the
+ * codecs it picks from a file's first bytes, PNG, JPEG, OpenEXR and PFM;
  * built and run by scripts/fuzz.sh): the first byte picks the file's
  * extension (.png .exr .tif .jpg .hdr .pfm, by its value modulo 6), the
- * rest is the file. OpenImageIO picks its reader by the extension and
- * tries the others when that one refuses the file, as it
- * does for clayfit. Images that decode are checked for non-finite values and
- * every pixel is decoded to radiance (cf_decode_pixel) as the capture does.
+ * rest is the file. Other formats go to OpenImageIO's module, which the
+ * fuzz build does not have: they are refused, naming the file. Images
+ * that decode are checked for non-finite values and every pixel is
+ * decoded to radiance (cf_decode_pixel) as the capture does.
  *
  * As the capture reads its photos: the header first (cf_image_read_header),
  * then the pixels of an image of that size (cf_image_read_sized). Small
  * size caps: a header whose image holds more than 2^22 values (16 MB of
  * floats) is not decoded here, so that libFuzzer's memory limit reports
  * real leaks and blow-ups, not large images (the capture compares the
- * header with its camera instead); OpenImageIO and OpenEXR run on one
- * thread.
- * OpenImageIO, libpng, libjpeg, libtiff and OpenEXR are Debian's builds,
- * not instrumented: crashes in them are found, but their coverage does not
- * guide the fuzzing.
+ * header with its camera instead).
+ * libpng, libjpeg and OpenEXR are Debian's builds, not instrumented:
+ * crashes in them are found, but their coverage does not guide the
+ * fuzzing; clayfit's codecs around them are instrumented.
  *
  * Every input is also parsed as a JPEG's markers (cf_jpeg_coding_parse, the
  * quality and chroma the fit's model of JPEG coding reads): a failure names
@@ -25,16 +25,14 @@
  * Besides crashes and sanitizer reports, a broken promise aborts: a failure
  * leaves the image empty and names the file; a success gives 1 to 4
  * channels of a positive size. */
-#include <OpenImageIO/imageio.h>
-
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 
 #include "clayfit/image.h"
 #include "fuzz_files.h"
 
-extern "C" int LLVMFuzzerInitialize(int *argc, char ***argv);
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 namespace {
@@ -59,12 +57,6 @@ void decode_all(const cf_image *image) {
 }
 
 }  // namespace
-
-extern "C" int LLVMFuzzerInitialize(int *, char ***) {
-  OIIO::attribute("threads", 1);
-  OIIO::attribute("exr_threads", 1);
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (size < 1) return 0;

@@ -5,7 +5,7 @@
  * wide, all from files of a few hundred bytes. They are refused before
  * OpenEXR reads them: cf_image_read_header says CF_EPARSE, "a corrupt
  * OpenEXR header", and names the file. Before, OpenEXR allocated the size
- * and the read failed later with OpenImageIO's message (CF_EIO).
+ * and the read failed later (CF_EIO).
  *   test_exr_headers REGRESSIONS_DIR */
 #ifndef _DEFAULT_SOURCE
 #define _DEFAULT_SOURCE
