@@ -13,11 +13,12 @@ add_library(clayfit_image STATIC image_io.c image_codec.c image_png.c image_pfm.
 target_link_libraries(clayfit_image PUBLIC clayfit_core
                       PRIVATE PNG::PNG JPEG::JPEG OpenEXR::OpenEXR ${CMAKE_DL_LIBS}
                       clayfit_warnings m)
+target_compile_definitions(clayfit_image PRIVATE CLAYFIT_MODULE_DIR="${CLAYFIT_MODULE_DIR}")
 
 # The general reader: OpenImageIO, when it is installed (the test command
 # installs it; the demo does not need it). A module in the build's lib/
-# folder, which every program finds along its run path (CMAKE_BUILD_RPATH,
-# CMakeLists.txt); it carries its own copy of what it calls of clayfit.
+# folder (CLAYFIT_MODULE_DIR, CMakeLists.txt), which image_io.c opens by
+# that path; it carries its own copy of what it calls of clayfit.
 find_package(OpenImageIO)
 if(OpenImageIO_FOUND)
   add_library(clayfit_oiio MODULE image_oiio.cpp image_codec.c ${PROJECT_SOURCE_DIR}/src/core/status.c)

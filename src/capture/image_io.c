@@ -17,9 +17,16 @@
 #include "image_codec.h"
 #include "image_exr_check.h"
 
-/* The OpenImageIO module's file name, found by the dynamic loader along
- * the program's run path (the build's lib/ folder). */
+/* The OpenImageIO module, by its full path: CMake's build puts it in its
+ * lib/ folder and names that folder here. Not through the run path: under
+ * AddressSanitizer, dlopen is called from libasan, whose run path it
+ * searches instead. A build without the folder (the fuzzing's) has no
+ * module. */
+#ifdef CLAYFIT_MODULE_DIR
+#define OIIO_MODULE CLAYFIT_MODULE_DIR "/libclayfit_oiio.so"
+#else
 #define OIIO_MODULE "libclayfit_oiio.so"
+#endif
 
 /* ---- reading ---- */
 
