@@ -30,7 +30,8 @@ IMAGE := src/capture/image_io.c src/capture/image_codec.c src/capture/image_png.
          src/capture/image_exr.cpp src/capture/image_exr_check.c src/capture/image_check.c \
          src/capture/colour.c src/capture/envmap.c src/capture/jpeg_coding.c
 CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
-FIT_READ := src/fit/fit_read.c src/fit/fit_result.c src/fit/fit_response.c
+FIT_READ := src/fit/fit_read.c src/fit/fit_read_sections.c src/fit/fit_read_choice.c \
+            src/fit/fit_result.c src/fit/fit_response.c
 
 # target: its harness, then the sources it reads with
 fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
