@@ -77,7 +77,11 @@ cf_status cf_image_check_finite(const cf_image *image, const char *path, cf_erro
  * .png, .tif/.tiff, .jpg/.jpeg). bits: 8 or 16 for PNG and TIFF, 8 for
  * JPEG, 16 (half) or 32 (float) for EXR, 32 for HDR and PFM. Values are
  * written as given (integer formats: clamped to [0, 1] and rounded); encode
- * them first (cf_linear_to_srgb) where the file should hold sRGB. */
+ * them first (cf_linear_to_srgb) where the file should hold sRGB. Whole or
+ * not at all: written to a temporary file beside `path` (PATH.tmp-PID.EXT),
+ * flushed to the disk and renamed into place; on a failure `path` is left
+ * as it was. A `path` that exists and is not a regular file (a FIFO, a
+ * device) is refused (CF_EINVAL). */
 cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_error *err);
 
 /* cf_image_write, and also the EXIF exposure time, f-number and ISO of

@@ -8,9 +8,12 @@
  * extension. */
 #include <dlfcn.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "clayfit/image.h"
 #include "core/file.h"
@@ -220,6 +223,48 @@ static const char *refused(kind k, int bits, int channels) {
   return "an extension .exr, .hdr, .pfm, .png, .tif, .tiff, .jpg or .jpeg";
 }
 
+/* The temporary file an image is written to, beside `path` and with its
+ * extension (OpenImageIO picks the format by it): "a/b.png" becomes
+ * "a/b.png.tmp-PID.png". An existing path that is not a regular file (a
+ * FIFO, a device) is refused: a FIFO with no reader would block the
+ * writer forever, and renaming over /dev/stdout would replace the link. */
+static cf_status temporary_beside(const char *path, char *out, size_t size, cf_error *err) {
+  struct stat st;
+  if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+    return cf_error_set(err, CF_EINVAL, "%s: exists and is not a regular file; an image is "
+                        "written to a file", path);
+  const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
+  const char *ext = dot && (!slash || dot > slash) ? dot : "";
+  int n = snprintf(out, size, "%s.tmp-%ld%s", path, (long)getpid(), ext);
+  if (n < 0 || (size_t)n >= size) return cf_error_set(err, CF_EINVAL, "%s: the path is too long", path);
+  return CF_OK;
+}
+
+/* The written temporary flushed to the disk (the codecs close it but do
+ * not sync) and renamed to `path` when the writer's status s is CF_OK,
+ * else removed: a killed or failed write leaves the earlier file. */
+static cf_status into_place(const char *temporary, const char *path, cf_status s, cf_error *err) {
+  size_t n = strlen(temporary);
+  if (s != CF_OK && err && strncmp(err->message, temporary, n) == 0) { /* name the caller's file */
+    char message[sizeof err->message];
+    snprintf(message, sizeof message, "%s%s", path, err->message + n);
+    memcpy(err->message, message, sizeof message);
+  }
+  if (s == CF_OK) {
+    int fd = open(temporary, O_RDONLY);
+    int failed = fd < 0 || fsync(fd) != 0 ? errno : 0;
+    if (fd >= 0 && close(fd) != 0 && !failed) failed = errno;
+    if (failed)
+      s = cf_error_set(err, CF_EIO, "%s: could not flush %s to the disk: %s", path, temporary,
+                       strerror(failed));
+  }
+  if (s == CF_OK && rename(temporary, path) != 0)
+    s = cf_error_set(err, CF_EIO, "%s: could not rename %s into place: %s", path, temporary,
+                     strerror(errno));
+  if (s != CF_OK) unlink(temporary);
+  return s;
+}
+
 /* Every writer's entry: the image and the format's bits checked, then the
  * codec of the extension (quality and chroma for a JPEG). */
 static cf_status write_any(const char *path, const cf_image *image, int bits,
@@ -235,22 +280,30 @@ static cf_status write_any(const char *path, const cf_image *image, int bits,
     return cf_error_set(err, CF_EINVAL,
                         "%s: cannot write %d bits x %d channels in this format; it takes %s", path,
                         bits, image->channels, why);
+  char temporary[4200];
+  cf_status s = temporary_beside(path, temporary, sizeof temporary, err);
+  if (s != CF_OK) return s;
   switch (k) {
     case KIND_PNG:
-      return image_png_write(path, image, bits, info, err);
-    case KIND_JPEG:
-      return image_jpeg_write(path, image, quality, chroma, info, err);
-    case KIND_EXR:
-      return image_exr_write(path, image, bits, info, err);
-    case KIND_PFM:
-      return image_pfm_write(path, image, err);
-    default:
+      s = image_png_write(temporary, image, bits, info, err);
       break;
+    case KIND_JPEG:
+      s = image_jpeg_write(temporary, image, quality, chroma, info, err);
+      break;
+    case KIND_EXR:
+      s = image_exr_write(temporary, image, bits, info, err);
+      break;
+    case KIND_PFM:
+      s = image_pfm_write(temporary, image, err);
+      break;
+    default: {
+      cf_status (*general)(const char *, const cf_image *, int, const cf_image_info *, int,
+                           cf_chroma, cf_error *);
+      *(void **)&general = oiio_function(path, "image_oiio_write", err);
+      s = general ? general(temporary, image, bits, info, quality, chroma, err) : CF_EUNSUPPORTED;
+    }
   }
-  cf_status (*general)(const char *, const cf_image *, int, const cf_image_info *, int, cf_chroma,
-                       cf_error *);
-  *(void **)&general = oiio_function(path, "image_oiio_write", err);
-  return general ? general(path, image, bits, info, quality, chroma, err) : CF_EUNSUPPORTED;
+  return into_place(temporary, path, s, err);
 }
 
 cf_status cf_image_write(const char *path, const cf_image *image, int bits, cf_error *err) {

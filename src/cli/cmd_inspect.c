@@ -243,7 +243,7 @@ int cmd_inspect(int argc, char **argv, cli_context *ctx) {
     json_decref(list);
     cf_capture_free(capture);
     cli_report("inspect", err.message);
-    return CLI_EXIT_FAILURE;
+    return s == CF_EINVAL ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE; /* EINVAL: not a file to replace */
   }
   int status = print_inspect(capture, as_json, overlays ? out_dir : NULL, list);
   cf_capture_free(capture);

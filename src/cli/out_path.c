@@ -1,6 +1,7 @@
 #include "out_path.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,6 +64,23 @@ static cf_status check_nearest_folder(const char *option, const char *path, cf_e
   return probe_folder(option, path, at, err);
 }
 
+/* A FIFO is written only while a process reads it; with none, the write
+ * would wait forever, so it is refused now, before any work. The probe's
+ * descriptor stays open to the process's end: closing it would end the
+ * reader's input (EOF) before the real output is written. */
+static cf_status check_fifo_reader(const char *option, const char *path, cf_error *err) {
+  int fd = open(path, O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0 && errno == ENXIO)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s '%s': a FIFO that no process is reading; clayfit would wait for a "
+                        "reader forever (start the reader first, or name a regular file)",
+                        option, path);
+  if (fd < 0)
+    return cf_error_set(err, CF_EINVAL, "%s '%s': cannot write: %s", option, path,
+                        strerror(errno));
+  return CF_OK;
+}
+
 /* A file to create or replace (cf_write_file: a temporary file beside it,
  * renamed into place). */
 static cf_status check_file(const char *option, const char *path, cf_error *err) {
@@ -79,7 +97,7 @@ static cf_status check_file(const char *option, const char *path, cf_error *err)
       if (access(path, W_OK) != 0)
         return cf_error_set(err, CF_EINVAL, "%s '%s': cannot write: %s", option, path,
                             strerror(errno));
-      return CF_OK;
+      return S_ISFIFO(st.st_mode) ? check_fifo_reader(option, path, err) : CF_OK;
     }
   } else if (errno != ENOENT && errno != ENOTDIR) {
     return cf_error_set(err, CF_EINVAL, "%s '%s': %s", option, path, strerror(errno));

@@ -105,10 +105,23 @@ static int write_all(int fd, const char *data, size_t size, int flush) {
   return flush && fsync(fd) != 0 ? errno : 0;
 }
 
-/* A path that exists and is not a regular file: written as it is. */
+/* A path that exists and is not a regular file: written as it is. Opened
+ * without waiting, so that a FIFO no process reads is refused (ENXIO)
+ * instead of blocking forever; then written with blocking writes. */
 static cf_status write_in_place(const char *path, const void *data, size_t size, cf_error *err) {
-  int fd = open(path, O_WRONLY | O_TRUNC);
+  int fd = open(path, O_WRONLY | O_TRUNC | O_NONBLOCK);
+  if (fd < 0 && errno == ENXIO)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: a FIFO that no process is reading; clayfit would wait for a reader "
+                        "forever (start the reader first, or name a regular file)",
+                        path);
   if (fd < 0) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  int flags = fcntl(fd, F_GETFL);
+  if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+    int failed = errno;
+    close(fd);
+    return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(failed));
+  }
   int failed = write_all(fd, data, size, 0);
   if (close(fd) != 0 && !failed) failed = errno;
   if (failed) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(failed));

@@ -284,40 +284,20 @@ cf_status cf_report_render_sphere(const cf_fit_result *result, const cf_sphere_v
 
 /* ---- the PNG ---- */
 
-/* Flush the written temporary to the disk before it is renamed into place
- * (the PNG writer closes it but does not sync). */
-static cf_status sync_file(const char *path, cf_error *err) {
-  int fd = open(path, O_RDONLY);
-  if (fd < 0) return cf_error_set(err, CF_EIO, "%s: cannot reopen: %s", path, strerror(errno));
-  int failed = fsync(fd) != 0;
-  int saved = errno;
-  failed |= close(fd) != 0;
-  return failed ? cf_error_set(err, CF_EIO, "%s: could not sync: %s", path, strerror(saved))
-                : CF_OK;
-}
-
 cf_status cf_sphere_write_png(const cf_image *linear, const char *path, cf_error *err) {
   if (!linear || !linear->pixels || linear->channels != 3 || linear->width <= 0 ||
       linear->height <= 0)
     return cf_error_set(err, CF_EINVAL, "%s: nothing to write (not a 3-channel render)",
                         path ? path : "(no path)");
   if (!path || !path[0]) return cf_error_set(err, CF_EINVAL, "an empty thumbnail path");
-  char temp[4200];
-  if (snprintf(temp, sizeof temp, "%s.tmp-%ld.png", path, (long)getpid()) >= (int)sizeof temp)
-    return cf_error_set(err, CF_ERANGE, "%s: the path is too long", path);
   cf_image display;
   cf_status s = cf_image_alloc(&display, linear->width, linear->height, 3, err);
   if (s != CF_OK) return s;
   size_t n = 3 * (size_t)linear->width * (size_t)linear->height;
   for (size_t i = 0; i < n; ++i)
     display.pixels[i] = (float)cf_linear_to_srgb(cf_sphere_tone(linear->pixels[i]));
-  s = cf_image_write(temp, &display, 8, err);
+  s = cf_image_write(path, &display, 8, err); /* whole or not at all */
   cf_image_free(&display);
-  if (s == CF_OK) s = sync_file(temp, err);
-  if (s == CF_OK && rename(temp, path) != 0)
-    s = cf_error_set(err, CF_EIO, "%s: could not rename %s into place: %s", path, temp,
-                     strerror(errno));
-  if (s != CF_OK) remove(temp);
   return s;
 }
 

@@ -9,7 +9,8 @@ output path and checks: exit status 2, the message (the option, the path
 and why), and that nothing was done first: stderr is that one line, with no
 progress line of loading, fitting or rendering (the commands run without
 --quiet). One good path per command (missing parent folders are created)
-must still work. The read-only folder case is skipped as root, for whom
+must still work, and export writes to a FIFO that a process reads (one
+that none reads is refused: the write would wait forever). The read-only folder case is skipped as root, for whom
 it is writable; the path under a regular file and the one in /proc fail
 for root too.
 """
@@ -19,6 +20,7 @@ import shutil
 import struct
 import subprocess
 import sys
+import threading
 import zlib
 
 FOLDER_CASES = [
@@ -42,11 +44,27 @@ FILE_CASES = [
     ("/proc/clayfit-out.json", r"^-o '/proc/clayfit-out.json': cannot (create a file in|write "
      r"into) the folder '/proc': .+$"),
     ("ro/x.json", r"^-o 'ro/x.json': cannot write into the folder 'ro': Permission denied$"),
+    ("fifo", r"^-o 'fifo': a FIFO that no process is reading; clayfit would wait for a reader "
+     r"forever \(start the reader first, or name a regular file\)$"),
 ]
 
 
 def run(command, cwd):
-    return subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=600)
+    return subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+def check_fifo_read(command, work):
+    """A FIFO that a process reads is written: export -o FIFO, the reader gets the JSON."""
+    received = []
+    reader = threading.Thread(target=lambda: received.append(
+        open(os.path.join(work, "fifo"), "rb").read()))
+    reader.start()
+    result = run(command("fifo"), work)
+    reader.join(timeout=60)
+    ok = result.returncode == 0 and received and received[0].lstrip().startswith(b"{")
+    print(f"{'ok' if ok else 'FAIL'} a FIFO with a reader: exit {result.returncode}, "
+          f"{len(received[0]) if received else 0} bytes read")
+    return [] if ok else [f"a FIFO with a reader: exit {result.returncode}: {result.stderr[-300:]}"]
 
 
 def write_grey_png(path, width, height, grey):
@@ -78,6 +96,9 @@ def setup(clayfit, work):
     os.makedirs(os.path.join(work, "adir"))
     os.makedirs(os.path.join(work, "fitdir", "fit.json"))  # a folder where fit.json goes
     os.makedirs(os.path.join(work, "ro"))
+    os.mkfifo(os.path.join(work, "fifo"))  # no process reads these two
+    os.makedirs(os.path.join(work, "fifodir"))
+    os.mkfifo(os.path.join(work, "fifodir", "fit.json"))
     os.chmod(os.path.join(work, "ro"), 0o555)
     with open(os.path.join(work, "somefile"), "w", encoding="utf-8") as f:
         f.write("a file\n")
@@ -96,7 +117,8 @@ def commands(clayfit, name):
     capture, fit = "capture/capture.json", "fit/fit.json"
     table = {
         "fit": (lambda o: [clayfit, "fit", capture, "-o", o, "--model", "M0"], "-o", INTO_CASES +
-                [("fitdir", r"^-o 'fitdir/fit.json': is a folder; a file is expected")]),
+                [("fitdir", r"^-o 'fitdir/fit.json': is a folder; a file is expected"),
+                 ("fifodir", r"^-o 'fifodir/fit.json': a FIFO that no process is reading")]),
         "report": (lambda o: [clayfit, "report", fit, "-o", o], "-o", FOLDER_CASES),
         "export": (lambda o: [clayfit, "export", fit, "--format", "json", "-o", o], "-o",
                    FILE_CASES),
@@ -155,6 +177,9 @@ def main():
         if result.returncode != 0:
             failures.append(f"good path {GOOD[name]!r}: exit {result.returncode}: "
                             f"{result.stderr.strip()[-300:]}")
+    if name == "export":
+        failures += check_fifo_read(command, work)
+        checked += 1
     os.chmod(os.path.join(work, "ro"), 0o755)
     for failure in failures:
         print("FAIL:", failure)

@@ -42,6 +42,14 @@ set_tests_properties(cli_inspect_ortho_circle cli_inspect_ortho_circle_text
 # the overlays test writes into ${ORTHO}: the others look for no inspect/ there
 set_tests_properties(cli_inspect_ortho_overlays PROPERTIES DEPENDS
                      "cli_inspect_ortho_circle;cli_inspect_ortho_circle_text")
+# an image output that exists and is not a regular file (here a FIFO that no
+# process reads, on which a plain write waits forever) is refused, exit 2
+add_test(NAME cli_inspect_overlay_fifo
+         COMMAND ${CHECK} --exit 2
+                 --stderr "fifo_overlays/photo.png: exists and is not a regular file; an image is written to a file"
+                 -- sh -c "rm -rf '${ORTHO}/fifo_overlays' && mkdir '${ORTHO}/fifo_overlays' && mkfifo '${ORTHO}/fifo_overlays/photo.png' && exec '${CLAYFIT}' --quiet inspect -o '${ORTHO}/fifo_overlays' '${ORTHO}/capture.json'")
+set_tests_properties(cli_inspect_overlay_fifo PROPERTIES LABELS "cli;capture" TIMEOUT 120
+                     FIXTURES_REQUIRED ortho_capture)
 clayfit_cli_test(inspect_diligent_circle --skip-unless ${CLAYFIT_SHARED_DATA}/diligent_ball
   --schema ${SCHEMA}/inspect.schema.json
   --expect "doc['camera'] == 'orthographic' and doc['sphere']['center'] is None"

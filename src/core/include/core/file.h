@@ -32,7 +32,8 @@ void cf_path_hidden_characters(const char *path, char *out, size_t size);
  * flush to the disk and the close checked, then renamed into place; on an
  * error the temporary is removed and `path` left as it was. A path that
  * exists and is not a regular file (/dev/stdout, a FIFO) is written
- * directly. CF_EIO with the path and the system's reason. */
+ * directly; a FIFO that no process reads is CF_EINVAL, not waited for.
+ * Else CF_EIO with the path and the system's reason. */
 cf_status cf_write_file(const char *path, const void *data, size_t size, cf_error *err);
 
 /* `dir`/`name` into out (size bytes); `name` as it is when absolute or when
