@@ -6,7 +6,10 @@
  *     as it was, removes its temporary, and says why (before, the earlier
  *     file was truncated and the message had no reason);
  *   - a folder that does not exist, and /dev/full, fail with the system's
- *     reason; /dev/null is written in place (not replaced by a file). */
+ *     reason; /dev/null is written in place (not replaced by a file);
+ *   - a FIFO that no process reads is refused, not waited on (before, the
+ *     write blocked forever); cf_open_regular_file refuses a FIFO and
+ *     /dev/zero at once, and opens a regular file with its size. */
 #include <dirent.h>
 #include <errno.h>
 #include <signal.h>
@@ -82,6 +85,25 @@ int main(void) {
   struct stat st;
   CHECK(cf_write_file("/dev/null", "x", 1, &err) == CF_OK, "/dev/null: %s", err.message);
   CHECK(stat("/dev/null", &st) == 0 && S_ISCHR(st.st_mode), "/dev/null is no longer a device");
+
+  /* a FIFO that no process reads or writes: refused at once, never waited on */
+  char fifo[300];
+  snprintf(fifo, sizeof fifo, "%s/fifo", dir);
+  CHECK(mkfifo(fifo, 0600) == 0, "mkfifo: %s", strerror(errno));
+  s = cf_write_file(fifo, "x", 1, &err);
+  CHECK(s == CF_EINVAL && strstr(err.message, "no process is reading"), "a FIFO written: %d, %s", s,
+        err.message);
+  FILE *file = NULL;
+  long long size = -1;
+  s = cf_open_regular_file(fifo, &file, &size, &err);
+  CHECK(s == CF_EIO && !file && strstr(err.message, "not a regular file"), "a FIFO read: %d, %s",
+        s, err.message);
+  CHECK(cf_open_regular_file("/dev/zero", &file, &size, &err) == CF_EIO && !file,
+        "/dev/zero read: %s", err.message);
+  CHECK(cf_open_regular_file(path, &file, &size, &err) == CF_OK && file && size == 3,
+        "a regular file: %s", err.message);
+  if (file) fclose(file);
+  unlink(fifo);
 
   unlink(path);
   rmdir(dir);

@@ -116,23 +116,17 @@ static void *oiio_function(const char *path, const char *name, cf_error *err) {
  * read by its codec (the header alone when image is NULL). */
 static cf_status read_any(const char *path, int width, int height, cf_image_header *header,
                           cf_image *image, cf_error *err) {
-  struct stat st;
-  if (stat(path, &st) != 0) {
-    char hidden[160];
-    cf_path_hidden_characters(path, hidden, sizeof hidden);
-    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file%s", path, hidden);
-    return cf_error_set(err, CF_EIO, "%s: %s%s", path, strerror(errno), hidden);
-  }
-  if (!S_ISREG(st.st_mode)) return cf_error_set(err, CF_EIO, "%s: not a regular file", path);
-  FILE *file = fopen(path, "rb");
-  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
+  FILE *file;
+  long long size;
+  cf_status s = cf_open_regular_file(path, &file, &size, err);
+  if (s != CF_OK) return s;
   unsigned char magic[8];
   const size_t got = fread(magic, 1, sizeof magic, file);
   image_reader reader;
-  cf_status s = reader_of(path, file, (long long)st.st_size, magic, got, &reader, err);
+  s = reader_of(path, file, size, magic, got, &reader, err);
   if (s == CF_OK && reader) {
     rewind(file);
-    s = reader(path, file, (long long)st.st_size, width, height, header, image, err);
+    s = reader(path, file, size, width, height, header, image, err);
   }
   fclose(file);
   if (s != CF_OK || reader) return s;

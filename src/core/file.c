@@ -10,24 +10,50 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+cf_status cf_open_regular_file(const char *path, FILE **file, long long *size, cf_error *err) {
+  *file = NULL;
+  *size = 0;
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC); /* a FIFO: no wait for a writer */
+  if (fd < 0) {
+    int failed = errno;
+    char hidden[160];
+    cf_path_hidden_characters(path, hidden, sizeof hidden);
+    if (failed == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file%s", path, hidden);
+    return cf_error_set(err, CF_EIO, "%s: %s%s", path, strerror(failed), hidden);
+  }
+  struct stat st;
+  int failed = fstat(fd, &st) != 0 ? errno : 0;
+  if (failed || !S_ISREG(st.st_mode)) {
+    close(fd);
+    return cf_error_set(err, CF_EIO, "%s: %s", path,
+                        failed ? strerror(failed) : "not a regular file");
+  }
+  int flags = fcntl(fd, F_GETFL);
+  if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+  *file = fdopen(fd, "rb");
+  if (!*file) {
+    failed = errno;
+    close(fd);
+    return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(failed));
+  }
+  *size = (long long)st.st_size;
+  return CF_OK;
+}
+
 cf_status cf_read_file(const char *path, size_t max_size, char **data, size_t *size,
                        cf_error *err) {
   *data = NULL;
   *size = 0;
-  struct stat st;
-  if (stat(path, &st) != 0) {
-    char hidden[160];
-    cf_path_hidden_characters(path, hidden, sizeof hidden);
-    if (errno == ENOENT) return cf_error_set(err, CF_ENOTFOUND, "%s: no such file%s", path, hidden);
-    return cf_error_set(err, CF_EIO, "%s: %s%s", path, strerror(errno), hidden);
-  }
-  if (!S_ISREG(st.st_mode)) return cf_error_set(err, CF_EIO, "%s: not a regular file", path);
-  if ((unsigned long long)st.st_size > (unsigned long long)max_size)
+  FILE *file;
+  long long file_size;
+  cf_status s = cf_open_regular_file(path, &file, &file_size, err);
+  if (s != CF_OK) return s;
+  if ((unsigned long long)file_size > (unsigned long long)max_size) {
+    fclose(file);
     return cf_error_set(err, CF_ERANGE, "%s: %lld bytes, more than the %zu this reader accepts",
-                        path, (long long)st.st_size, max_size);
-  FILE *file = fopen(path, "rb");
-  if (!file) return cf_error_set(err, CF_EIO, "%s: %s", path, strerror(errno));
-  size_t expected = (size_t)st.st_size;
+                        path, file_size, max_size);
+  }
+  size_t expected = (size_t)file_size;
   char *buffer = malloc(expected + 1);
   if (!buffer) {
     fclose(file);

@@ -4,8 +4,16 @@
 #define CLAYFIT_CORE_FILE_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "clayfit/status.h"
+
+/* Open the regular file at `path` for reading (*file, closed with fclose())
+ * and give its *size in bytes. CF_ENOTFOUND if it does not exist (naming
+ * any character in the path that prints as nothing), CF_EIO if it cannot
+ * be opened or is not a regular file: a FIFO or a device is refused, never
+ * waited on (it is opened without blocking, then checked). */
+cf_status cf_open_regular_file(const char *path, FILE **file, long long *size, cf_error *err);
 
 /* Read the whole file at `path` into a new buffer (*data, freed with free())
  * of *size bytes plus a terminating NUL (not counted), so text parsers may
