@@ -7,6 +7,7 @@
 #include <stdlib.h>
 
 #include "clayfit/image.h"
+#include "core/file.h"
 
 /* The markers come before the first scan; 1 MiB holds them in any camera's
  * file (EXIF segments are at most 64 KiB each). */
@@ -160,8 +161,10 @@ cf_status cf_jpeg_coding_parse(const unsigned char *bytes, size_t size, const ch
 }
 
 cf_status cf_jpeg_coding_read(const char *path, cf_jpeg_coding *coding, cf_error *err) {
-  FILE *file = fopen(path, "rb");
-  if (!file) return cf_error_set(err, CF_EIO, "%s: cannot open it", path);
+  FILE *file;
+  long long file_size;
+  cf_status opened = cf_open_regular_file(path, &file, &file_size, err);
+  if (opened != CF_OK) return opened;
   unsigned char *bytes = malloc(JPEG_HEADER_MOST);
   size_t size = bytes ? fread(bytes, 1, JPEG_HEADER_MOST, file) : 0;
   int failed = ferror(file);

@@ -127,8 +127,8 @@ static void test_damaged(const char *dir, const cf_image *image) {
   cf_jpeg_coding coding;
   CHECK(cf_jpeg_coding_parse(good, size, "good", &coding, &err) == CF_OK && coding.quality == 90,
         "the undamaged header reads: %s", err.message);
-  CHECK(cf_jpeg_coding_read("/nonexistent/x.jpg", &coding, &err) == CF_EIO,
-        "a missing file is CF_EIO");
+  CHECK(cf_jpeg_coding_read("/nonexistent/x.jpg", &coding, &err) == CF_ENOTFOUND,
+        "a missing file is CF_ENOTFOUND");
 }
 
 /* cf_encode_value is decode's inverse, with its slope. */
