@@ -22,6 +22,10 @@
 #define RIM_PX 1.5      /* a blob closer to the outline grazes */
 #define RIM_RHO 0.95    /* a centroid farther out grazes: light > 143° off the view */
 #define EXTENDED_FRACTION 0.02
+/* The ball's background level is this quantile of its grey: a highlight
+ * covering up to 1 − it of the ball does not raise it (the median of
+ * uw_chrome's balls is 0). */
+#define BACKGROUND_QUANTILE 0.9
 
 const char *cf_chrome_warning_text(unsigned bit) {
   switch (bit) {
@@ -294,8 +298,7 @@ static double grey_at(const cf_image *p, size_t k) {
 }
 
 /* The ball's pixels (-1 off it, else 0) and their grey's peak and
- * background level: its 90th percentile, so that a highlight up to a tenth
- * of the ball does not raise it (the median of uw_chrome's balls is 0). */
+ * background level (BACKGROUND_QUANTILE). */
 static cf_status ball_pixels(const cf_image *photo, const ball *b, const char *name, int *label,
                              cf_chrome_result *result, cf_error *err) {
   size_t n = (size_t)photo->width * (size_t)photo->height, on = 0;
@@ -313,7 +316,8 @@ static cf_status ball_pixels(const cf_image *photo, const ball *b, const char *n
     if (g > result->peak) result->peak = g;
   }
   result->ball_pixels = on;
-  result->background = on ? order_kth_smallest(values, on, (size_t)(0.9 * (double)(on - 1))) : 0.0;
+  result->background =
+      on ? order_kth_smallest(values, on, (size_t)(BACKGROUND_QUANTILE * (double)(on - 1))) : 0.0;
   free(values);
   if (on < 20)
     return cf_error_set(err, CF_EINVAL, "%s: the ball covers %zu pixels of the photo", name, on);
@@ -425,6 +429,33 @@ static cf_status blobs_to_lights(blob *blobs, size_t count, const cf_ellipse *ou
   return CF_OK;
 }
 
+/* The error for a ball whose brightest value is not min_contrast times its
+ * background. When the pixels a highlight would take (threshold × the
+ * brightest value) cover more of the ball than a highlight can without
+ * raising the background, that is what is wrong: the ball is bright
+ * over too much of it. */
+static cf_status no_highlight(const cf_image *photo, const int *label, const cf_chrome_options *o,
+                              const char *name, const cf_chrome_result *r, cf_error *err) {
+  const size_t n = (size_t)photo->width * (size_t)photo->height;
+  size_t bright = 0;
+  for (size_t k = 0; k < n; ++k)
+    bright += label[k] == 0 && grey_at(photo, k) >= o->threshold * r->peak;
+  const double share = (double)bright / (double)r->ball_pixels, most = 1.0 - BACKGROUND_QUANTILE;
+  if (r->peak > 0.0 && share > most)
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: no highlight on the ball: its bright region (at least %g times its "
+                        "brightest value %.3g) covers %.0f %% of the ball, more than the %.0f %% "
+                        "a chrome ball's highlight can cover (an overexposed photo, or a ball "
+                        "that is not a mirror?); take a shorter exposure, or photograph a "
+                        "mirror ball",
+                        name, o->threshold, r->peak, 100.0 * share, 100.0 * most);
+  return cf_error_set(err, CF_EINVAL,
+                      "%s: no highlight on the ball: its brightest value %.3g is not %g times its "
+                      "background (%.0fth percentile) %.3g (is the light in the photo, and the "
+                      "ball where the outline says?)",
+                      name, r->peak, o->min_contrast, 100.0 * BACKGROUND_QUANTILE, r->background);
+}
+
 static cf_status check_options(const cf_chrome_options *o, const char *name, cf_error *err) {
   if (o->lights < 1 || o->lights > CF_CHROME_MAX_LIGHTS)
     return cf_error_set(err, CF_EINVAL, "%s: %d lights asked for; 1 to %d can be found", name,
@@ -467,11 +498,7 @@ cf_status cf_chrome_lights(const cf_image *photo, const cf_ellipse *outline,
   s = label && stack && blobs ? CF_OK : cf_error_set(err, CF_ENOMEM, "%s: out of memory", name);
   if (s == CF_OK) s = ball_pixels(photo, &b, name, label, result, err);
   if (s == CF_OK && !(result->peak > 0.0 && result->peak >= o.min_contrast * result->background))
-    s = cf_error_set(err, CF_EINVAL,
-                     "%s: no highlight on the ball: its brightest value %.3g is not %g times its "
-                     "background (90th percentile) %.3g (is the light in the photo, and the "
-                     "ball where the outline says?)",
-                     name, result->peak, o.min_contrast, result->background);
+    s = no_highlight(photo, label, &o, name, result, err);
   if (s == CF_OK)
     s = find_blobs(photo, &b, o.threshold * result->peak, o.clip_level, label, stack, blobs,
                    MAX_BLOBS, &count, name, err);

@@ -4,13 +4,14 @@
  * its hat weight; the response is the declared transfer, not recovered),
  * and the mirror-ball unwrap (Debevec 1998, "Rendering Synthetic Objects
  * into Real Scenes", §3: the ball reflects the whole sphere but −v). */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 
+#include "capture/light_probe.h"
 #include "core/order_statistics.h"
 #include "core/vec.h"
 #include "envmap.h"
-#include "capture/light_probe.h"
 
 #define MAX_BRACKETS CF_MAX_BRACKETS
 /* 8 × 8 reads a map pixel cover balls up to r = 16 H / π (1300 px at the
@@ -42,9 +43,9 @@ static cf_status check_brackets(const cf_image *brackets, const double *exposure
                           "must be photos of one size",
                           name, k + 1, b->width, b->height, names ? names[0] : "bracket",
                           brackets[0].width, brackets[0].height);
-    if (!(exposures[k] > 0.0 && isfinite(exposures[k])))
-      return cf_error_set(err, CF_EINVAL, "%s (bracket %d): exposure %g must be positive", name,
-                          k + 1, exposures[k]);
+    if (!(exposures[k] >= CF_BRACKET_MIN_EXPOSURE && exposures[k] <= CF_BRACKET_MAX_EXPOSURE))
+      return cf_error_set(err, CF_EINVAL, "%s (bracket %d): exposure %g is outside [%g, %g]", name,
+                          k + 1, exposures[k], CF_BRACKET_MIN_EXPOSURE, CF_BRACKET_MAX_EXPOSURE);
     if (k > 0 && !(exposures[k] > exposures[k - 1]))
       return cf_error_set(err, CF_EINVAL,
                           "exposures must increase strictly from bracket to bracket: %s (bracket "
@@ -267,9 +268,9 @@ static cf_status check_unwrap(const cf_image *photo, const cf_probe_ball *b,
                         o->width);
   if (!(o->margin_px >= 0.0 && isfinite(o->margin_px)))
     return cf_error_set(err, CF_EINVAL, "light probe: margin %g px must be >= 0", o->margin_px);
-  if (!(o->reflectance > 0.0 && o->reflectance <= 1.0))
-    return cf_error_set(err, CF_EINVAL, "light probe: reflectance %g must be in (0, 1]",
-                        o->reflectance);
+  if (!(o->reflectance >= CF_PROBE_MIN_REFLECTANCE && o->reflectance <= 1.0))
+    return cf_error_set(err, CF_EINVAL, "light probe: reflectance %g is outside [%g, 1]",
+                        o->reflectance, CF_PROBE_MIN_REFLECTANCE);
   if (!(isfinite(b->cx) && isfinite(b->cy) && b->radius > o->margin_px + 1.0 &&
         isfinite(b->radius)))
     return cf_error_set(err, CF_EINVAL,
@@ -287,6 +288,36 @@ static cf_status check_unwrap(const cf_image *photo, const cf_probe_ball *b,
     return cf_error_set(err, CF_EINVAL, "light probe: the mask is %d x %d, the photo %d x %d",
                         o->mask->width, o->mask->height, photo->width, photo->height);
   return cf_image_check_finite(photo, "light probe photo", err);
+}
+
+/* The map as light: every texel finite, and some texel at least a float's
+ * smallest normal value. */
+static cf_status check_map(const cf_image *map, double reflectance, cf_error *err) {
+  const size_t texels = (size_t)map->width * (size_t)map->height;
+  size_t bad = 0, first = 0;
+  double brightest = 0.0;
+  for (size_t i = 0; i < texels; ++i) {
+    const float *rgb = map->pixels + 4 * i;
+    if (!isfinite(rgb[0]) || !isfinite(rgb[1]) || !isfinite(rgb[2])) {
+      if (bad++ == 0) first = i;
+      continue;
+    }
+    brightest = fmax(brightest, fmax(rgb[0], fmax(rgb[1], rgb[2])));
+  }
+  if (bad)
+    return cf_error_set(err, CF_EINVAL,
+                        "light probe: %zu texels of the map are not finite (the first at (%zu, "
+                        "%zu)): the photo's radiance over the reflectance %g is beyond a float's "
+                        "range (%g)",
+                        bad, first % (size_t)map->width, first / (size_t)map->width, reflectance,
+                        (double)FLT_MAX);
+  if (!(brightest >= FLT_MIN))
+    return cf_error_set(err, CF_EINVAL,
+                        "light probe: the map is black (its brightest value %g is below a float's "
+                        "smallest normal value %g): the ball's radiance is 0 or too small for a "
+                        "light",
+                        brightest, (double)FLT_MIN);
+  return CF_OK;
 }
 
 cf_status cf_probe_unwrap(const cf_image *photo, const cf_probe_ball *ball,
@@ -317,6 +348,10 @@ cf_status cf_probe_unwrap(const cf_image *photo, const cf_probe_ball *ball,
     cf_image_free(map);
     return cf_error_set(err, CF_EINVAL,
                         "light probe: no direction of the map is observable on the ball");
+  }
+  if ((s = check_map(map, options->reflectance, err)) != CF_OK) {
+    cf_image_free(map);
+    return s;
   }
   if (report) {
     const double sin_alpha = u.max_offset / ball->radius; /* α: normal's angle from v */

@@ -35,6 +35,21 @@ void cli_viewer_bundle(char *path, size_t size);
 /* clayfit lights --probe (cmd_lights_probe.c), called by cmd_lights when
  * --probe is among its arguments; argv[0] is "lights". */
 int cli_lights_probe(int argc, char **argv);
+/* The photos' and masks' headers of clayfit lights and lights --probe, read
+ * before any pixel is decoded (cmd_lights.c): a small compressed file may
+ * declare gigabytes. cap: the most decoded bytes (32-bit floats) of all the
+ * files together, 0 for CF_CAPTURE_MAX_IMAGE_BYTES; bytes: the sum so far. */
+typedef struct cli_headers {
+  unsigned long long cap, bytes;
+} cli_headers;
+/* path's header into *h; its decoded bytes added to the sum, which must
+ * stay within the cap (CF_ERANGE naming the file, the sum and the cap). */
+struct cf_image_header;
+cf_status cli_read_header(cli_headers *t, const char *path, struct cf_image_header *h,
+                          cf_error *err);
+/* s, with " (from its header, before decoding)" after err's message when
+ * it is an error: a size refused from a header. */
+cf_status cli_from_header(cf_status s, cf_error *err);
 
 /* A progress line on stderr ("clayfit synth: rendering images 5/16"),
  * rewritten in place; user is the command's name. Ends the line when

@@ -8,6 +8,7 @@
 
 #include "args.h"
 #include "capture/chrome_ball.h"
+#include "clayfit/capture.h"
 #include "cli.h"
 #include "core/file.h"
 #include "core/json_reader.h"
@@ -22,7 +23,7 @@ static void lights_usage(FILE *out) {
   fprintf(out,
           "usage: clayfit lights PHOTO... (--mask MASK... | --silhouette) -o DIR\n"
           "                      [--colmap MODEL [--image NAME...]] [--lights N]\n"
-          "                      [--threshold F] [--contrast C]\n"
+          "                      [--threshold F] [--contrast C] [--max-image-memory GB]\n"
           "       clayfit lights --probe ...   (a light probe: clayfit lights --probe --help)\n\n"
           "Finds the highlight of each light in photos of a chrome (mirror) ball taken\n"
           "with the camera and lights of a capture, and the direction toward each light:\n"
@@ -52,11 +53,15 @@ static void lights_usage(FILE *out) {
           "  --contrast C     the brightest value must be C times the ball's background\n"
           "                   (its 90th percentile), or the photo has no highlight\n"
           "                   (default 8)\n"
+          "  --max-image-memory GB  the most decoded image data the photos and masks\n"
+          "                   may hold, all together (default 32; checked from the\n"
+          "                   files' headers before decoding)\n"
           "  -o DIR           the output folder (created if missing)\n"
           "  -h, --help       this help\n\n"
           "A photo without a highlight, with more or fewer than N, a ball clipped by the\n"
-          "image border, or a photo that does not match its mask or camera is an error\n"
-          "(exit 2) and nothing is written. A highlight at the ball's rim (the light\n"
+          "image border, or a photo that does not match its mask or camera (checked from\n"
+          "the headers before any pixel is decoded) is an error (exit 2) and nothing is\n"
+          "written. A highlight at the ball's rim (the light\n"
           "behind the ball) is a warning, in lights.json and on stderr.\n");
 }
 
@@ -64,6 +69,7 @@ typedef struct lights_args {
   const char *out, *colmap;
   const char *photos[MAX_PHOTOS], *masks[MAX_PHOTOS], *names[MAX_PHOTOS];
   int photo_count, mask_count, name_count, silhouette;
+  unsigned long long max_image_bytes; /* --max-image-memory, 0: the default */
   cf_chrome_options options;
 } lights_args;
 
@@ -89,6 +95,8 @@ static cf_status parse_value(int c, const char *arg, lights_args *a, cf_error *e
       if (a->mask_count == MAX_PHOTOS) return cf_error_set(err, CF_EINVAL, "too many --mask");
       a->masks[a->mask_count++] = arg;
       return CF_OK;
+    case 'G':
+      return cli_parse_image_memory(arg, &a->max_image_bytes, err);
     case 'i':
       if (a->name_count == MAX_PHOTOS) return cf_error_set(err, CF_EINVAL, "too many --image");
       a->names[a->name_count++] = arg;
@@ -129,6 +137,7 @@ static int parse_lights_args(int argc, char **argv, lights_args *a, cf_status *s
                                           {"lights", required_argument, NULL, 'n'},
                                           {"threshold", required_argument, NULL, 't'},
                                           {"contrast", required_argument, NULL, 'C'},
+                                          {"max-image-memory", required_argument, NULL, 'G'},
                                           {"help", no_argument, NULL, 'h'},
                                           {0}};
   memset(a, 0, sizeof *a);
@@ -158,6 +167,7 @@ static int parse_lights_args(int argc, char **argv, lights_args *a, cf_status *s
 /* ---- the photos, the outlines, the cameras ---- */
 
 typedef struct lights_run {
+  cf_image_header *headers; /* per photo */
   cf_image *photos, *masks;
   cf_ellipse *outlines; /* one per photo */
   cf_colmap_model model;
@@ -169,6 +179,7 @@ typedef struct lights_run {
 static void run_free(lights_run *r, int photos, int masks) {
   for (int k = 0; r->photos && k < photos; ++k) cf_image_free(&r->photos[k]);
   for (int k = 0; r->masks && k < masks; ++k) cf_image_free(&r->masks[k]);
+  free(r->headers);
   free(r->photos);
   free(r->masks);
   free(r->outlines);
@@ -178,33 +189,83 @@ static void run_free(lights_run *r, int photos, int masks) {
   cf_colmap_model_free(&r->model);
 }
 
+cf_status cli_from_header(cf_status s, cf_error *err) {
+  if (s != CF_OK && err) {
+    size_t n = strlen(err->message);
+    snprintf(err->message + n, sizeof err->message - n, " (from its header, before decoding)");
+  }
+  return s;
+}
+
+cf_status cli_read_header(cli_headers *t, const char *path, cf_image_header *h, cf_error *err) {
+  cf_status s = cf_image_read_header(path, h, err);
+  if (s != CF_OK) return s;
+  const unsigned long long cap = t->cap ? t->cap : CF_CAPTURE_MAX_IMAGE_BYTES;
+  t->bytes += (unsigned long long)h->width * (unsigned long long)h->height *
+              (unsigned long long)h->channels * sizeof(float);
+  if (t->bytes <= cap) return CF_OK;
+  return cf_error_set(err, CF_ERANGE,
+                      "%s (%d x %d x %d): the photos and masks up to it decode to %.3g GB of "
+                      "32-bit floats, more than the cap of %.3g GB (checked from the headers, "
+                      "before decoding; raise it with --max-image-memory GB)",
+                      path, h->width, h->height, h->channels, (double)t->bytes / 1e9,
+                      (double)cap / 1e9);
+}
+
+/* Every photo's and mask's header, before any pixel is decoded: each photo
+ * the size of its mask (or of the first photo, for one outline), all within
+ * the cap on decoded bytes. A 420 KB PNG declaring 12000 x 12000 took
+ * 12.8 s and 2.2 GB to decode before its size was refused. */
+static cf_status read_headers(const lights_args *a, lights_run *r, cf_error *err) {
+  cli_headers t = {a->max_image_bytes, 0};
+  cf_image_header mask;
+  cf_status s = CF_OK;
+  for (int k = 0; s == CF_OK && k < a->photo_count; ++k) {
+    const cf_image_header *h = &r->headers[k], *first = &r->headers[0];
+    s = cli_read_header(&t, a->photos[k], &r->headers[k], err);
+    if (s == CF_OK && k < a->mask_count) s = cli_read_header(&t, a->masks[k], &mask, err);
+    if (s != CF_OK) return s;
+    if (a->mask_count && (h->width != mask.width || h->height != mask.height))
+      s = cf_error_set(err, CF_EINVAL, "%s is %d x %d pixels but its mask %s is %d x %d",
+                       a->photos[k], h->width, h->height, a->masks[a->mask_count == 1 ? 0 : k],
+                       mask.width, mask.height);
+    else if (a->silhouette && (h->width != first->width || h->height != first->height))
+      s = cf_error_set(err, CF_EINVAL,
+                       "%s is %d x %d, %s is %d x %d: one outline cannot serve both", a->photos[k],
+                       h->width, h->height, a->photos[0], first->width, first->height);
+    s = cli_from_header(s, err);
+  }
+  return s;
+}
+
+/* The photos and masks decoded, each of the size its header declared. */
 static cf_status read_images(const lights_args *a, lights_run *r, cf_error *err) {
+  cf_status s = CF_OK;
+  for (int k = 0; s == CF_OK && k < a->photo_count; ++k) {
+    const cf_image_header *h = &r->headers[k];
+    s = cf_image_read_sized(a->photos[k], h->width, h->height, &r->photos[k], NULL, err);
+    if (s == CF_OK) s = cf_image_check_finite(&r->photos[k], a->photos[k], err);
+  }
+  for (int k = 0; s == CF_OK && k < a->mask_count; ++k) {
+    const cf_image *photo = &r->photos[k];
+    s = cf_image_read_sized(a->masks[k], photo->width, photo->height, &r->masks[k], NULL, err);
+  }
+  return s;
+}
+
+static cf_status alloc_run(const lights_args *a, lights_run *r, cf_error *err) {
   size_t n = (size_t)a->photo_count;
+  r->headers = calloc(n, sizeof *r->headers);
   r->photos = calloc(n, sizeof *r->photos);
   r->masks = calloc((size_t)a->mask_count + 1, sizeof *r->masks);
   r->outlines = calloc(n, sizeof *r->outlines);
   r->cameras = calloc(n, sizeof *r->cameras);
   r->rotations = calloc(n, sizeof *r->rotations);
   r->results = calloc(n, sizeof *r->results);
-  if (!r->photos || !r->masks || !r->outlines || !r->cameras || !r->rotations || !r->results)
+  if (!r->headers || !r->photos || !r->masks || !r->outlines || !r->cameras || !r->rotations ||
+      !r->results)
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu photos", n);
-  cf_status s = CF_OK;
-  for (int k = 0; s == CF_OK && k < a->photo_count; ++k) {
-    s = cf_image_read(a->photos[k], &r->photos[k], NULL, err);
-    if (s == CF_OK) s = cf_image_check_finite(&r->photos[k], a->photos[k], err);
-  }
-  for (int k = 0; s == CF_OK && k < a->mask_count; ++k) {
-    const cf_image *photo = &r->photos[a->mask_count == 1 ? 0 : k];
-    s = cf_image_read_sized(a->masks[k], photo->width, photo->height, &r->masks[k], NULL, err);
-  }
-  for (int k = 1; s == CF_OK && k < a->photo_count; ++k)
-    if (a->mask_count <= 1 &&
-        (r->photos[k].width != r->photos[0].width || r->photos[k].height != r->photos[0].height))
-      s = cf_error_set(err, CF_EINVAL,
-                       "%s is %d x %d, %s is %d x %d: one outline cannot serve both", a->photos[k],
-                       r->photos[k].width, r->photos[k].height, a->photos[0], r->photos[0].width,
-                       r->photos[0].height);
-  return s;
+  return CF_OK;
 }
 
 static cf_status find_outlines(const lights_args *a, lights_run *r, cf_error *err) {
@@ -238,12 +299,14 @@ static cf_status find_cameras(const lights_args *a, lights_run *r, cf_error *err
                           a->photos[k], name, a->colmap,
                           a->name_count ? "" : " (give --image NAME)");
     const cf_camera *camera = cf_colmap_find_camera(&r->model, image->camera_id);
-    if (!camera || camera->width != (uint64_t)r->photos[k].width ||
-        camera->height != (uint64_t)r->photos[k].height)
-      return cf_error_set(err, CF_EINVAL, "%s is %d x %d, its COLMAP camera %u is %llu x %llu",
-                          a->photos[k], r->photos[k].width, r->photos[k].height, image->camera_id,
-                          camera ? (unsigned long long)camera->width : 0ULL,
-                          camera ? (unsigned long long)camera->height : 0ULL);
+    const cf_image_header *h = &r->headers[k];
+    if (!camera || camera->width != (uint64_t)h->width || camera->height != (uint64_t)h->height)
+      return cli_from_header(
+          cf_error_set(err, CF_EINVAL, "%s is %d x %d, its COLMAP camera %u is %llu x %llu",
+                       a->photos[k], h->width, h->height, image->camera_id,
+                       camera ? (unsigned long long)camera->width : 0ULL,
+                       camera ? (unsigned long long)camera->height : 0ULL),
+          err);
     r->cameras[k] = camera;
     cf_quaternion_to_matrix(image->qvec, r->rotations[k]);
     if (k == 0) first = image;
@@ -408,9 +471,11 @@ static int run_lights(int argc, char **argv, lights_args *a, cli_context *ctx) {
   }
   lights_run r;
   memset(&r, 0, sizeof r);
-  s = read_images(a, &r, &err);
-  if (s == CF_OK) s = find_outlines(a, &r, &err);
+  s = alloc_run(a, &r, &err);
+  if (s == CF_OK) s = read_headers(a, &r, &err);
   if (s == CF_OK) s = find_cameras(a, &r, &err);
+  if (s == CF_OK) s = read_images(a, &r, &err);
+  if (s == CF_OK) s = find_outlines(a, &r, &err);
   if (s == CF_OK) s = find_lights(a, &r, ctx, &err);
   int writing = s == CF_OK; /* the inputs were good: what fails now is a failure */
   if (s == CF_OK) s = write_outputs(a, &r, &err);

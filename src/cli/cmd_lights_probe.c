@@ -40,11 +40,12 @@ static void probe_usage(FILE *out) {
           "                     exposure with their hat weight on the stored code;\n"
           "                     clipped and dark codes get no weight\n"
           "  --exposures T...   one exposure per photo (seconds or any relative unit, as\n"
-          "                     numbers or fractions like 1/60), strictly increasing;\n"
-          "                     default: the photos' EXIF ExposureTime (1 for one photo)\n"
+          "                     numbers or fractions like 1/60), strictly increasing,\n"
+          "                     each in [1e-9, 1e9]; default: the photos' EXIF\n"
+          "                     ExposureTime (1 for one photo)\n"
           "  --encoding E       the brackets' tone curve: srgb (default for 8/16-bit\n"
           "                     photos), linear (default for float ones) or gamma\n"
-          "  --gamma G          for --encoding gamma (default 2.2)\n"
+          "  --gamma G          for --encoding gamma, in [0.1, 10] (default 2.2)\n"
           "  --clip X           stored value (0..1) at or above which a code is clipped\n"
           "                     (default: the top code, 1 - 0.5/(2^bits - 1))\n"
           "  --mask MASK        the ball's pixels (non-zero); its outline gives the circle,\n"
@@ -52,14 +53,20 @@ static void probe_usage(FILE *out) {
           "  --circle CX CY R   the ball's outline in pixels (pixel centres at +0.5);\n"
           "                     --mask or --circle is required\n"
           "  --margin PX        the band inside the outline left out (default 2)\n"
-          "  --reflectance R    chrome's reflectance, one constant (0, 1] (default 1: the\n"
-          "                     map is the reflection as photographed; Fresnel ignored)\n"
+          "  --reflectance R    chrome's reflectance, one constant in [0.01, 1] (default 1:\n"
+          "                     the map is the reflection as photographed; Fresnel\n"
+          "                     ignored)\n"
           "  --width W          the map's width, even (default 512; height W/2)\n"
           "  -o PROBE.exr       the map (written atomically)\n"
+          "  --max-image-memory GB  the most decoded image data the photos and mask may\n"
+          "                     hold, all together (default 32; checked from the files'\n"
+          "                     headers before decoding)\n"
           "  --json             print the summary as JSON\n"
           "  -h, --help         this help\n\n"
           "Exit status: 0 done, 1 failure while running, 2 bad command line or input\n"
-          "(a bracket missing or of another size, exposures not increasing).\n");
+          "(a bracket missing or of another size, exposures not increasing, a map\n"
+          "that is no usable light: a texel not finite, or all black); nothing is\n"
+          "written then.\n");
 }
 
 typedef struct probe_args {
@@ -71,6 +78,7 @@ typedef struct probe_args {
   double circle[3];
   int has_circle, width, json;
   double gamma, clip, margin, reflectance;
+  unsigned long long max_image_bytes; /* --max-image-memory, 0: the default */
 } probe_args;
 
 static int usage_error(const char *format, ...) __attribute__((format(printf, 1, 2)));
@@ -105,6 +113,13 @@ static cf_status parse_exposure(const char *text, double *out, cf_error *err) {
   return s;
 }
 
+/* An exposure (--exposures or EXIF, `from`) inside the merge's range. */
+static cf_status check_exposure(double t, const char *from, cf_error *err) {
+  if (t >= CF_BRACKET_MIN_EXPOSURE && t <= CF_BRACKET_MAX_EXPOSURE) return CF_OK;
+  return cf_error_set(err, CF_EINVAL, "%s: exposure %g is outside [%g, %g]", from, t,
+                      CF_BRACKET_MIN_EXPOSURE, CF_BRACKET_MAX_EXPOSURE);
+}
+
 /* The values after a multi-valued option, up to the next option. */
 static int values_after(int argc, char **argv, int i) {
   int n = 0;
@@ -126,8 +141,10 @@ static int parse_option(int argc, char **argv, int *i, probe_args *a, cf_error *
     a->num_photos = n;
   } else if (!strcmp(opt, "--exposures")) {
     if (n < 1 || n > MAX_PHOTOS) return usage_error("--exposures takes 1 to 64 values");
-    for (int k = 0; s == CF_OK && k < n; ++k)
+    for (int k = 0; s == CF_OK && k < n; ++k) {
       s = parse_exposure(argv[*i + 1 + k], &a->exposures[k], err);
+      if (s == CF_OK) s = check_exposure(a->exposures[k], "--exposures", err);
+    }
     a->num_exposures = n;
   } else if (!strcmp(opt, "--circle")) {
     if (n != 3) return usage_error("--circle takes 3 numbers: CX CY R");
@@ -156,6 +173,8 @@ static int parse_option(int argc, char **argv, int *i, probe_args *a, cf_error *
       s = cli_parse_number(v, "--margin", &a->margin, err);
     else if (!strcmp(opt, "--reflectance"))
       s = cli_parse_number(v, "--reflectance", &a->reflectance, err);
+    else if (!strcmp(opt, "--max-image-memory"))
+      s = cli_parse_image_memory(v, &a->max_image_bytes, err);
     else if (!strcmp(opt, "--width")) {
       s = cli_parse_count(v, "--width", 8, 16384, &width, err);
       a->width = (int)width;
@@ -204,7 +223,14 @@ static int parse_args(int argc, char **argv, probe_args *a, int *help) {
   if (a->encoding && strcmp(a->encoding, "srgb") && strcmp(a->encoding, "linear") &&
       strcmp(a->encoding, "gamma"))
     return usage_error("--encoding '%s': expected srgb, linear or gamma", a->encoding);
-  if (!(a->gamma > 0.0)) return usage_error("--gamma must be positive");
+  /* cameras' and displays' tone curves are gamma 1.8 to 2.6 */
+  if (!(a->gamma >= 0.1 && a->gamma <= 10.0))
+    return usage_error("--gamma: %g is outside [0.1, 10]", a->gamma);
+  if (!(a->reflectance >= CF_PROBE_MIN_REFLECTANCE && a->reflectance <= 1.0))
+    return usage_error(
+        "--reflectance: %g is outside [%g, 1] (black glass reflects 0.04, chrome "
+        "about 0.6)",
+        a->reflectance, CF_PROBE_MIN_REFLECTANCE);
   if (!isnan(a->clip) && !(a->clip > 0.0 && a->clip <= 1.0))
     return usage_error("--clip must be in (0, 1]");
   return CLI_EXIT_OK;
@@ -223,15 +249,38 @@ static void free_inputs(probe_inputs *in, int count) {
   cf_image_free(&in->mask);
 }
 
+/* Every photo's and the mask's header, before any pixel is decoded: each
+ * of the first photo's size, all within the cap on decoded bytes. */
+static cf_status read_headers(const probe_args *a, cf_image_header *first, cf_error *err) {
+  cli_headers t = {a->max_image_bytes, 0};
+  cf_status s = cli_read_header(&t, a->photos[0], first, err);
+  if (s == CF_OK && (long)first->width * first->height > MAX_PIXELS)
+    s = cli_from_header(
+        cf_error_set(err, CF_EINVAL, "%s: %d x %d pixels is more than a light probe needs",
+                     a->photos[0], first->width, first->height),
+        err);
+  for (int k = 0; s == CF_OK && k <= a->num_photos; ++k) {
+    const char *path = k < a->num_photos ? a->photos[k] : a->mask;
+    cf_image_header h;
+    if (k == 0 || !path) continue;
+    s = cli_read_header(&t, path, &h, err);
+    if (s == CF_OK && (h.width != first->width || h.height != first->height))
+      s = cli_from_header(
+          cf_error_set(err, CF_EINVAL, "%s is %d x %d pixels but %s is %d x %d: %s", path, h.width,
+                       h.height, a->photos[0], first->width, first->height,
+                       k < a->num_photos ? "brackets must be photos of one size"
+                                         : "the mask must be the photo's size"),
+          err);
+  }
+  return s;
+}
+
 /* Every photo (and the mask) of the first one's size, checked from the
  * headers before decoding; brackets of one kind (bits, float or not). */
 static cf_status read_inputs(const probe_args *a, probe_inputs *in, cf_error *err) {
   cf_image_header first;
-  cf_status s = cf_image_read_header(a->photos[0], &first, err);
+  cf_status s = read_headers(a, &first, err);
   if (s != CF_OK) return s;
-  if ((long)first.width * first.height > MAX_PIXELS)
-    return cf_error_set(err, CF_EINVAL, "%s: %d x %d pixels is more than a light probe needs",
-                        a->photos[0], first.width, first.height);
   for (int k = 0; k < a->num_photos; ++k) {
     s = cf_image_read_sized(a->photos[k], first.width, first.height, &in->photos[k], &in->info[k],
                             err);
@@ -274,6 +323,10 @@ static cf_status exposures_of(const probe_args *a, const probe_inputs *in, doubl
                           "%s has no EXIF exposure time: give every bracket's with --exposures",
                           a->photos[k]);
     t[k] = in->info[k].exposure_time;
+    char from[4200];
+    snprintf(from, sizeof from, "%.4000s (EXIF)", a->photos[k]);
+    cf_status s = check_exposure(t[k], from, err);
+    if (s != CF_OK) return s;
   }
   return CF_OK;
 }

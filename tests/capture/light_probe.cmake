@@ -58,7 +58,7 @@ clayfit_probe_test(not_increasing --exit 2
 clayfit_probe_test(no_exif --exit 2
   --stderr "bracket1.png has no EXIF exposure time: give every bracket's with --exposures"
   -- ${CLAYFIT} lights --probe ${BRACKETS} ${BALL} -o ${LIGHT_PROBE}/never.exr)
-clayfit_probe_test(sizes --exit 2 --stderr "normals.exr: its header says 48 x 48 pixels, not the 768 x 768"
+clayfit_probe_test(sizes --exit 2 --stderr "normals.exr is 48 x 48 pixels but .*bracket1.png is 768 x 768: brackets must be photos of one size \\(from its header, before decoding\\)"
   -- ${CLAYFIT} lights --probe ${LIGHT_PROBE}/bracket1.png ${LIGHT_PROBE}/normals.exr
      --exposures 1 4 ${BALL} -o ${LIGHT_PROBE}/never.exr)
 clayfit_probe_test(no_outline --exit 2 --stderr "give --mask MASK or --circle CX CY R"

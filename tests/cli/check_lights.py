@@ -5,6 +5,8 @@ usage: check_lights.py equal CLAYFIT WORKDIR
        check_lights.py uw CLAYFIT DATADIR WORKDIR
        check_lights.py bad CLAYFIT WORKDIR
        check_lights.py colmap CLAYFIT WORKDIR
+       check_lights.py bomb CLAYFIT WORKDIR [--no-limit]
+       check_lights.py probe_bad CLAYFIT WORKDIR
 
 equal: a small orthographic capture (a Lambertian sphere under 6 directional
 lights of irradiance 1.25, 16-bit linear PNG) declared once with
@@ -22,8 +24,10 @@ directions as written. Exit 77 without the data.
 bad: clayfit lights on chrome balls drawn here (a disc of radius 30 px with
 highlights of radius 2 px where the lights' mirror points are): no
 highlight, two where one was expected (and accepted with --lights 2), a
-ball clipped by the border are errors (exit 2, nothing written); a light
-behind the ball (150 degrees from the view) is a warning in lights.json.
+ball clipped by the border, a highlight of radius 12 px (16 % of the ball:
+said so, not "no highlight ... is not 8 times its background") are errors
+(exit 2, nothing written); a light behind the ball (150 degrees from the
+view) is a warning in lights.json.
 
 colmap: a chrome ball seen through a PINHOLE camera of a COLMAP text model
 whose pose turns 30 degrees about y, drawn here (one sample a pixel, a light
@@ -32,11 +36,25 @@ world frame (R^T of the camera frame's), within 1.5 degrees (the library's
 accuracy is test_chrome_ball's; this checks the frame and the model's
 look-up), found under the name given with --image; one mask for two photos
 of different poses is refused.
+
+bomb: photos whose PNG header declares 26000 x 26000 (the pixel data of a
+96 x 80 one): refused from the header, before decoding, against the mask's
+size and against the other photos' with --silhouette, under an address-space
+limit of 2 GB that decoding (2.7 GB of floats) exceeds (--no-limit: without
+it, for the sanitizers, which reserve terabytes); the cap on decoded bytes
+(--max-image-memory) from the headers. Exit 2, nothing written.
+
+probe_bad: clayfit lights --probe on a 96 x 80 PFM ball: a reflectance or an
+exposure out of range (1e-300 made infinite texels, 1e306 an all-zero map),
+photo values that overflow a float over the reflectance 0.5, a black ball,
+a photo declaring 16000 x 16000 beside a 96 x 80 mask (refused from the
+headers, before decoding), the cap on decoded bytes. Exit 2, no map written.
 """
 import json
 import math
 import os
 import re
+import resource
 import shutil
 import struct
 import subprocess
@@ -226,9 +244,10 @@ def uw(clayfit, data, work):
     return failures
 
 
-def chrome(path, lights, cx=CX):
-    """An 8-bit chrome ball: dim, with a bright disc at each light's mirror
-    point (the normal halfway between the light and the view)."""
+def chrome(path, lights, cx=CX, spot=2.0):
+    """An 8-bit chrome ball: dim, with a bright disc of radius `spot` px at
+    each light's mirror point (the normal halfway between the light and the
+    view)."""
     points = []
     for light in lights:
         h = [a + b for a, b in zip(light, (0, 0, 1))]
@@ -238,7 +257,7 @@ def chrome(path, lights, cx=CX):
     def value(x, y):
         if (x + 0.5 - cx) ** 2 + (y + 0.5 - CY) ** 2 > RADIUS ** 2:
             return (0.02,)
-        bright = any((x + 0.5 - px) ** 2 + (y + 0.5 - py) ** 2 <= 4 for px, py in points)
+        bright = any((x + 0.5 - px) ** 2 + (y + 0.5 - py) ** 2 <= spot ** 2 for px, py in points)
         return (1.0 if bright else 0.06,)
     png(path, WIDTH, HEIGHT, 1, 8, value)
     png(path.replace(".png", ".mask.png"), WIDTH, HEIGHT, 1, 8,
@@ -251,6 +270,11 @@ def bad(clayfit, work):
     behind = (math.sin(math.radians(150)), 0.0, math.cos(math.radians(150)))
     cases = [  # name, lights drawn, disc centre x, extra options, exit, stderr or warning
         ("none", [], CX, [], 2, "no highlight on the ball"),
+        ("wide", [(0, 0, 1)], CX, [], 2,
+         "wide.png: no highlight on the ball: its bright region \\(at least 0.5 times its "
+         "brightest value 1\\) covers 16 % of the ball, more than the 10 % a chrome ball's "
+         "highlight can cover \\(an overexposed photo, or a ball that is not a mirror\\?\\); "
+         "take a shorter exposure"),
         ("two", [(0.3, 0.3, 0.9), (-0.4, -0.2, 0.89)], CX, [], 2,
          "2 highlights on the ball .* where 1 was expected"),
         ("two_declared", [(0.3, 0.3, 0.9), (-0.4, -0.2, 0.89)], CX, ["--lights", "2"], 0, None),
@@ -260,7 +284,7 @@ def bad(clayfit, work):
     failures = 0
     for name, lights, cx, options, status, expected in cases:
         photo = os.path.join(work, name + ".png")
-        chrome(photo, lights, cx)
+        chrome(photo, lights, cx, 12.0 if name == "wide" else 2.0)
         out = os.path.join(work, "out_" + name)
         result = run([clayfit, "--quiet", "lights", photo, "--mask",
                       photo.replace(".png", ".mask.png"), "-o", out, *options])
@@ -281,6 +305,103 @@ def bad(clayfit, work):
         if (expected or "") not in warnings or (not expected and "grazing" in warnings):
             failures += fail(f"{name}: warnings {warnings!r}")
         print(f"{name}: {[light['direction'] for light in found]} {warnings}")
+    return failures
+
+
+def refused(name, command, expected, output, limit=None):
+    """1 if command does not exit 2 with stderr matching `expected`, or
+    writes `output`; limit: an address-space limit in bytes."""
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600,
+                            preexec_fn=limited if limit else None)
+    if result.returncode != 2 or not re.search(expected, result.stderr):
+        return fail(f"{name}: exit {result.returncode}, stderr {result.stderr!r}; expected "
+                    f"exit 2 and /{expected}/")
+    if os.path.exists(output):
+        return fail(f"{name}: {output} was written")
+    print(f"{name}: {result.stderr.strip()}")
+    return 0
+
+
+def bomb_photo(path, width, height):
+    """A chrome ball photo whose PNG header declares width x height."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "capture"))
+    from make_hostile_captures import patch_png_size
+    chrome(path, [(0.3, 0.3, 0.9)])
+    patch_png_size(path, width, height)
+
+
+def bomb(clayfit, work, limit):
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    photo, huge = os.path.join(work, "photo.png"), os.path.join(work, "huge.png")
+    chrome(photo, [(0.3, 0.3, 0.9)])
+    bomb_photo(huge, 26000, 26000)
+    mask, out = photo.replace(".png", ".mask.png"), os.path.join(work, "out")
+    written = os.path.join(out, "lights.json")
+    before = "\\(from its header, before decoding\\)"
+    return (refused("mask", [clayfit, "--quiet", "lights", huge, "--mask", mask, "-o", out],
+                    f"huge.png is 26000 x 26000 pixels but its mask .*photo.mask.png is 96 x 80 "
+                    f"{before}", written, limit) +
+            refused("silhouette", [clayfit, "--quiet", "lights", photo, huge, "--silhouette",
+                                   "-o", out],
+                    f"huge.png is 26000 x 26000, .*photo.png is 96 x 80: one outline cannot serve "
+                    f"both {before}", written, limit) +
+            refused("cap", [clayfit, "--quiet", "lights", photo, "--mask", mask, "-o", out,
+                            "--max-image-memory", "1e-5"],
+                    "photo.png \\(96 x 80 x 1\\): the photos and masks up to it decode to "
+                    "3.07e-05 GB of 32-bit floats, more than the cap of 1e-05 GB \\(checked from "
+                    "the headers, before decoding", written))
+
+
+def pfm(path, value):
+    """A 96 x 80 RGB PFM (little-endian, bottom row first) of value(x, y)."""
+    rows = [b"".join(struct.pack("<3f", *([value(x, y)] * 3)) for x in range(WIDTH))
+            for y in reversed(range(HEIGHT))]
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (WIDTH, HEIGHT) + b"".join(rows))
+
+
+def probe_bad(clayfit, work):
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+
+    def on_ball(level):
+        return lambda x, y: level if (x + 0.5 - CX) ** 2 + (y + 0.5 - CY) ** 2 <= RADIUS ** 2 \
+            else 0.0
+    for name, level in (("ball", 0.5), ("huge", 3e38), ("black", 0.0)):
+        pfm(os.path.join(work, name + ".pfm"), on_ball(level))
+    chrome(os.path.join(work, "photo.png"), [(0.3, 0.3, 0.9)])
+    bomb_photo(os.path.join(work, "bomb.png"), 16000, 16000)
+    out = os.path.join(work, "probe.exr")
+    circle = ["--circle", str(CX), str(CY), str(RADIUS), "-o", out]
+
+    def probe(photo, *options):
+        return [clayfit, "lights", "--probe", os.path.join(work, photo), *options]
+    cases = [
+        ("reflectance", probe("ball.pfm", "--reflectance", "1e-300", *circle),
+         "--reflectance: 1e-300 is outside \\[0.01, 1\\]"),
+        ("exposure", probe("ball.pfm", "--exposures", "1e306", *circle),
+         "--exposures: exposure 1e\\+306 is outside \\[1e-09, 1e\\+09\\]"),
+        ("overflow", probe("huge.pfm", "--reflectance", "0.5", *circle),
+         "light probe: [0-9]+ texels of the map are not finite .*over the reflectance 0.5 is "
+         "beyond a float's range"),
+        ("black", probe("black.pfm", *circle),
+         "light probe: the map is black \\(its brightest value 0 is below a float's smallest "
+         "normal value"),
+        ("bomb", probe("bomb.png", "--mask", os.path.join(work, "photo.mask.png"), "-o", out),
+         "photo.mask.png is 96 x 80 pixels but .*bomb.png is 16000 x 16000: the mask must be the "
+         "photo's size \\(from its header, before decoding\\)"),
+        ("cap", probe("ball.pfm", "--max-image-memory", "1e-5", *circle),
+         "ball.pfm \\(96 x 80 x 3\\): the photos and masks up to it decode to 9.22e-05 GB of "
+         "32-bit floats, more than the cap of 1e-05 GB"),
+    ]
+    failures = sum(refused(name, command, expected, out) for name, command, expected in cases)
+    # the inputs of those cases within range give a map
+    result = run(probe("ball.pfm", "--reflectance", "0.01", "--exposures", "1e9", *circle))
+    if result.returncode != 0 or not os.path.exists(out):
+        failures += fail(f"in range: exit {result.returncode}, {result.stderr!r}")
     return failures
 
 
@@ -361,6 +482,10 @@ def main():
         failures = colmap(sys.argv[2], sys.argv[3])
     elif sys.argv[1] == "bad":
         failures = bad(sys.argv[2], sys.argv[3])
+    elif sys.argv[1] == "bomb":
+        failures = bomb(sys.argv[2], sys.argv[3], None if "--no-limit" in sys.argv else 2 * 10**9)
+    elif sys.argv[1] == "probe_bad":
+        failures = probe_bad(sys.argv[2], sys.argv[3])
     else:
         failures = uw(sys.argv[2], sys.argv[3], sys.argv[4])
     if failures == 77:

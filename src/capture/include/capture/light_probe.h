@@ -51,12 +51,19 @@ typedef struct cf_bracket_report {
 #define CF_BRACKET_MIN_SAMPLES 100
 #define CF_BRACKET_RATIO_TOLERANCE 1.5
 
-/* Merge `count` brackets (1..64) of one scene, exposures[k] > 0 strictly
- * increasing (seconds or any relative unit; the radiance is per that
- * unit), into a 3-channel linear radiance image (Debevec & Malik 1997,
- * eq. 6, with their response known rather than recovered):
- *   E = Σ_k w(s_k) f⁻¹(s_k) / t_k  /  Σ_k w(s_k)   per channel,
- *   w(s) = min(s − dark, saturated − s)  (their hat, on the stored code),
+/* The range of an exposure (seconds or any relative unit). Cameras expose
+ * from 1/32000 s to hours (3e-5 to 1e4 s); a relative unit widens that.
+ * Within it, every 8- or 16-bit code over its exposure (1/65535 to 1e9)
+ * stays far inside a float's normal range (1.2e-38 to 3.4e38): 1e306 made
+ * every radiance 0. */
+#define CF_BRACKET_MIN_EXPOSURE 1e-9
+#define CF_BRACKET_MAX_EXPOSURE 1e9
+
+/* Merge `count` brackets (1..64) of one scene, exposures[k] in
+ * [CF_BRACKET_MIN_EXPOSURE, CF_BRACKET_MAX_EXPOSURE] strictly increasing (seconds or any relative
+ * unit; the radiance is per that unit), into a 3-channel linear radiance image (Debevec & Malik
+ * 1997, eq. 6, with their response known rather than recovered): E = Σ_k w(s_k) f⁻¹(s_k) / t_k  /
+ * Σ_k w(s_k)   per channel, w(s) = min(s − dark, saturated − s)  (their hat, on the stored code),
  * brackets whose code is dropped weighing 0. A channel clipped in every
  * bracket gets f⁻¹(saturated) / t_min (a lower bound), one dark in every
  * bracket f⁻¹(s) / t_max of its longest bracket; both are counted in
@@ -78,12 +85,17 @@ typedef struct cf_probe_ball {
   double cx, cy, radius; /* the ball's outline in the photo, pixels */
 } cf_probe_ball;
 
+/* The least reflectance of a mirror ball: below black glass's 0.04 (chrome
+ * reflects about 0.6). 1e-300 made 126,232 texels per channel infinite. */
+#define CF_PROBE_MIN_REFLECTANCE 0.01
+
 typedef struct cf_probe_options {
   int width;            /* map width, even, 8..16384; the height is width / 2 */
   double margin_px;     /* the outline's band not used, >= 0 (edge pixels mix ball
                            and background) */
-  double reflectance;   /* chrome's reflectance, one constant in (0, 1]: the map is
-                           the reflection divided by it (Fresnel ignored) */
+  double reflectance;   /* chrome's reflectance, one constant in
+                           [CF_PROBE_MIN_REFLECTANCE, 1]: the map is the
+                           reflection divided by it (Fresnel ignored) */
   const cf_image *mask; /* optional, the photo's size: non-zero = ball; every
                            bilinear tap must be on it */
 } cf_probe_options;
@@ -117,7 +129,10 @@ void cf_envmap_pixel(int width, int height, const double d[3], double *x, double
  * cap around −v, behind the ball) are RGB 0, alpha 0 — the `environment`
  * light ignores alpha, so it sees no light from there. CF_EINVAL: bad
  * options, a ball not wholly inside the photo, a mask of another size, a
- * non-finite photo value, no observable direction. */
+ * non-finite photo value, no observable direction, and a map that is no
+ * usable light: a texel not finite (the photo's radiance over the
+ * reflectance beyond a float's range) or every texel below a float's
+ * smallest normal value (FLT_MIN: a black ball). */
 cf_status cf_probe_unwrap(const cf_image *photo, const cf_probe_ball *ball,
                           const cf_probe_options *options, cf_image *map, cf_probe_report *report,
                           cf_error *err);
