@@ -3,15 +3,12 @@
  * capture's `environment` light reads (src/capture/include/capture/light_probe.h,
  * docs/lights.md "Light probe"). cmd_lights.c hands over when it sees
  * --probe. */
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <unistd.h>
 
 #include "args.h"
 #include "capture/chrome_ball.h"
@@ -390,25 +387,6 @@ static cf_status find_ball(const probe_args *a, probe_inputs *in, probe_result *
 
 /* ---- writing ---- */
 
-/* The map into a temporary file beside PROBE.exr, synced, renamed. */
-static cf_status write_atomic(const char *path, const cf_image *map, cf_error *err) {
-  char temp[4200];
-  if (snprintf(temp, sizeof temp, "%s.tmp-%ld.exr", path, (long)getpid()) >= (int)sizeof temp)
-    return cf_error_set(err, CF_ERANGE, "%s: the path is too long", path);
-  cf_status s = cf_image_write(temp, map, 32, err);
-  if (s == CF_OK) {
-    int fd = open(temp, O_RDONLY);
-    if (fd < 0 || fsync(fd) != 0)
-      s = cf_error_set(err, CF_EIO, "%s: could not sync: %s", temp, strerror(errno));
-    if (fd >= 0) close(fd);
-  }
-  if (s == CF_OK && rename(temp, path) != 0)
-    s = cf_error_set(err, CF_EIO, "%s: could not rename %s into place: %s", path, temp,
-                     strerror(errno));
-  if (s != CF_OK) remove(temp);
-  return s;
-}
-
 static void print_summary(const probe_args *a, const probe_result *r) {
   if (a->json) {
     json_t *doc = json_pack(
@@ -488,7 +466,7 @@ int cli_lights_probe(int argc, char **argv) {
     cli_report(COMMAND, err.message);
     return s == CF_ENOMEM ? CLI_EXIT_FAILURE : CLI_EXIT_USAGE;
   }
-  s = write_atomic(a.output, &map, &err);
+  s = cf_image_write(a.output, &map, 32, &err); /* whole or not at all */
   cf_image_free(&map);
   if (s != CF_OK) {
     cli_report(COMMAND, err.message);
