@@ -85,11 +85,15 @@ static cf_status load(cf_capture *capture, const char *path, const cf_capture_op
   if (!capture->views || !capture->images || !capture->raw_exposures)
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
   if ((s = capture_load_views(capture, err)) != CF_OK) return s;
+  if ((s = capture_read_headers(capture, options, err)) != CF_OK) return s;
   if ((s = capture_load_surface(capture, options, err)) != CF_OK) return s;
   if ((s = capture_load_lights(capture, err)) != CF_OK) return s;
   capture->obs.lights = capture->max_lights;
   if ((s = capture_read_images(capture, options, err)) != CF_OK) return s;
-  if (capture->spec.exposure == CF_EXPOSURE_EXIF) normalise_exif_exposures(capture);
+  if (capture->spec.exposure == CF_EXPOSURE_EXIF) {
+    if ((s = capture_check_exposure_spread(capture, err)) != CF_OK) return s;
+    normalise_exif_exposures(capture);
+  }
   if ((s = check_sphere_seen(capture, err)) != CF_OK) return s;
   if ((s = capture_screen_observations(capture, err)) != CF_OK) return s;
   /* the observations' irradiance in absolute units from the reference */

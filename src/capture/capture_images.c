@@ -291,7 +291,8 @@ static cf_status from_header(cf_status s, cf_error *err) {
 }
 
 /* Image k's header against its camera (capture_check_size, which records
- * its size), the normal map and its mask's header (or the shared mask's). */
+ * its size), the normal map's header and its mask's header (or the shared
+ * mask's). */
 static cf_status check_header(cf_capture *capture, size_t k, const cf_image_header *mask_shared,
                               cf_image_header *h, unsigned long long *bytes, cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
@@ -300,8 +301,8 @@ static cf_status check_header(cf_capture *capture, size_t k, const cf_image_head
   *bytes += decoded_bytes(h);
   cf_image as_declared = {h->width, h->height, h->channels, NULL};
   if ((s = from_header(capture_check_size(capture, k, &as_declared, err), err)) != CF_OK) return s;
-  const cf_image *map = &capture->normal_map;
-  if (map->pixels && (map->width != h->width || map->height != h->height))
+  const cf_image *map = &capture->normal_map; /* its header's size (map_headers) */
+  if (spec->normal_map && (map->width != h->width || map->height != h->height))
     return from_header(
         cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
                      spec->normal_map, map->width, map->height, spec->image_paths[k], h->width,
@@ -323,18 +324,78 @@ static cf_status check_header(cf_capture *capture, size_t k, const cf_image_head
       err);
 }
 
-/* Every image's and mask's header, in image order, before any pixel is
- * decoded: a small compressed file may declare gigabytes (a 1.9 MB PNG
- * declaring 26000 x 26000 took 29 s and 10 GB to decode before its size
- * was refused). Also the total against the cap, duplicates, and a mix of
+/* CF_ERANGE when the bytes counted so far, up to `what` (a phrase naming
+ * the files, the last one's size), pass the cap. */
+static cf_status check_cap(const cf_capture *capture, unsigned long long bytes,
+                           unsigned long long cap, const char *what, cf_error *err) {
+  if (bytes <= cap) return CF_OK;
+  return cf_error_set(err, CF_ERANGE,
+                      "%s: %s decode to %.3g GB of 32-bit floats, more than the cap of %.3g GB on "
+                      "a capture's image data (checked from the headers; raise it with clayfit's "
+                      "--max-image-memory GB)",
+                      capture->spec.path, what, (double)bytes / 1e9, (double)cap / 1e9);
+}
+
+/* The maps the capture names, before its photos: the normal map (its
+ * header's size kept in capture->normal_map, pixels NULL, for the photos'
+ * headers and its decoding to hold to) and each environment map, their
+ * decoded bytes counted against the cap like the photos'. *maps: 1 when
+ * there is one. */
+static cf_status map_headers(cf_capture *capture, unsigned long long cap,
+                             unsigned long long *bytes, int *maps, cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  char what[CF_ERROR_MESSAGE_SIZE];
+  cf_image_header h;
+  cf_status s = CF_OK;
+  *maps = 0;
+  if (spec->normal_map) {
+    *maps = 1;
+    s = cf_image_read_header(spec->normal_map, &h, err);
+    if (s == CF_OK) {
+      *bytes += decoded_bytes(&h);
+      capture->normal_map.width = h.width, capture->normal_map.height = h.height;
+      snprintf(what, sizeof what, "the normal map %s (%d x %d x %d)", spec->normal_map, h.width,
+               h.height, h.channels);
+      s = check_cap(capture, *bytes, cap, what, err);
+    }
+  }
+  for (size_t i = 0; s == CF_OK && i < spec->num_lights; ++i) {
+    const char *file = spec->lights[i].file;
+    if (spec->lights[i].kind != CF_LIGHT_SPEC_ENVIRONMENT) continue;
+    *maps = 1;
+    if ((s = cf_image_read_header(file, &h, err)) != CF_OK) break;
+    *bytes += decoded_bytes(&h);
+    snprintf(what, sizeof what, "the maps up to the environment map %s (%d x %d x %d)", file,
+             h.width, h.height, h.channels);
+    s = check_cap(capture, *bytes, cap, what, err);
+  }
+  return s;
+}
+
+/* 1 when every image has the same mask file (DiLiGenT's): decoded once. */
+static int shares_one_mask(const cf_capture *capture) {
+  const char *const *masks = (const char *const *)capture->spec.mask_paths;
+  const size_t n = capture->spec.num_images;
+  int one = masks && n > 1;
+  for (size_t k = 1; one && k < n; ++k) one = strcmp(masks[k], masks[0]) == 0;
+  return one;
+}
+
+/* Every map's, image's and mask's header, before any pixel is decoded: a
+ * small compressed file may declare gigabytes (a 1.9 MB PNG declaring
+ * 26000 x 26000 took 29 s and 10 GB to decode before its size was
+ * refused). Also the total against the cap, duplicates, and a mix of
  * sample types (a warning). */
-static cf_status read_headers(cf_capture *capture, const cf_capture_options *options, int one_mask,
-                              cf_error *err) {
+cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *options,
+                               cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
   cf_status s = check_duplicates(capture, err);
   unsigned long long cap =
       options && options->max_image_bytes ? options->max_image_bytes : CF_CAPTURE_MAX_IMAGE_BYTES;
   unsigned long long bytes = 0;
+  int maps = 0;
+  if (s == CF_OK) s = map_headers(capture, cap, &bytes, &maps, err);
+  const int one_mask = shares_one_mask(capture);
   cf_image_header shared;
   if (s == CF_OK && one_mask) {
     s = cf_image_read_header(spec->mask_paths[0], &shared, err);
@@ -344,14 +405,13 @@ static cf_status read_headers(cf_capture *capture, const cf_capture_options *opt
   for (size_t k = 0; s == CF_OK && k < spec->num_images; ++k) {
     cf_image_header h;
     s = check_header(capture, k, one_mask ? &shared : NULL, &h, &bytes, err);
-    if (s == CF_OK && bytes > cap)
-      s = cf_error_set(err, CF_ERANGE,
-                       "%s: the images up to %s (%zu of %zu; %d x %d x %d the last) and "
-                       "their masks decode to %.3g GB of 32-bit floats, more than the cap of "
-                       "%.3g GB on a capture's image data (checked from the headers; raise it "
-                       "with clayfit's --max-image-memory GB)",
-                       spec->path, spec->image_names[k], k + 1, spec->num_images, h.width, h.height,
-                       h.channels, (double)bytes / 1e9, (double)cap / 1e9);
+    if (s != CF_OK) break;
+    char what[CF_ERROR_MESSAGE_SIZE];
+    snprintf(what, sizeof what,
+             "%sthe images up to %s (%zu of %zu; %d x %d x %d the last) and their masks",
+             maps ? "the maps and " : "", spec->image_names[k], k + 1, spec->num_images, h.width,
+             h.height, h.channels);
+    s = check_cap(capture, bytes, cap, what, err);
     if (s == CF_OK && counts[sample_kind(&h.info)]++ == 0) first[sample_kind(&h.info)] = k;
   }
   if (s == CF_OK) warn_mixed_samples(capture, counts, first);
@@ -374,10 +434,8 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
   }
   const char *const *masks = (const char *const *)capture->spec.mask_paths;
-  r.one_mask = masks && n > 1;
-  for (size_t k = 1; r.one_mask && k < n; ++k) r.one_mask = strcmp(masks[k], masks[0]) == 0;
-  cf_status s = read_headers(capture, options, r.one_mask, err);
-  if (s == CF_OK && r.one_mask) {
+  r.one_mask = shares_one_mask(capture);
+  if (r.one_mask) {
     r.shared_status =
         cf_image_read_sized(masks[0], capture->images[0].width, capture->images[0].height,
                             &r.shared_mask, NULL, &r.shared_err);
@@ -387,7 +445,8 @@ cf_status capture_read_images(cf_capture *capture, const cf_capture_options *opt
                    "image adds an observation",
                    masks[0]);
   }
-  if (s == CF_OK && n > 0) {
+  cf_status s = CF_OK;
+  if (n > 0) {
     r.options = options;
     r.err = err;
     const int parts = 1 + (n < READERS ? (int)n : READERS);

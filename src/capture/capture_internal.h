@@ -89,9 +89,15 @@ cf_status capture_load_views(cf_capture *capture, cf_error *err);
 cf_status capture_check_size(cf_capture *capture, size_t k, const cf_image *image, cf_error *err);
 
 /* capture_views.c: the exposure e_k of image k from the spec or EXIF
- * (before normalisation). */
+ * (before normalisation); an EXIF field outside what cameras record is
+ * refused (CF_EINVAL, naming the field and its range). */
 cf_status capture_raw_exposure(const cf_capture *capture, size_t k, const cf_image_info *info,
                                double *exposure, cf_error *err);
+
+/* capture_views.c: CF_EINVAL when an image's EXIF exposure
+ * (raw_exposures) is more than 2^16 times above or below the capture's
+ * median. */
+cf_status capture_check_exposure_spread(const cf_capture *capture, cf_error *err);
 
 /* capture_lights.c: every image's lights (needs the sphere's radius for
  * flash offsets given in metres). */
@@ -131,8 +137,16 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
  * positive observation or mostly such values (CF_EINVAL, saying why). */
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
 
+/* capture_images.c: every map's, image's and mask's header read before
+ * any of them is decoded: sizes against the cameras, masks and normal map
+ * (whose header's size it records in capture->normal_map, pixels NULL),
+ * the decoded bytes against the cap (CF_ERANGE), duplicates. */
+cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *options,
+                               cf_error *err);
+
 /* Read every image (and its mask) and add its observations, in image
- * order, decoding ahead on other threads (capture_images.c). */
+ * order, decoding ahead on other threads (capture_images.c), after
+ * capture_read_headers. */
 cf_status capture_read_images(cf_capture *capture, const cf_capture_options *options,
                               cf_error *err);
 

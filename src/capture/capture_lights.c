@@ -128,7 +128,7 @@ static cf_status environment_lights(cf_capture *capture, const cf_light_spec *sp
                                          reduced, &report, err)
                         : cf_error_set(err, CF_ENOMEM, "out of memory");
   if (s == CF_OK && report.clamped)
-    capture_warn(capture, "%s: %zu negative or non-finite values clamped to 0", spec_light->file,
+    capture_warn(capture, "%s: %zu negative values clamped to 0", spec_light->file,
                  report.clamped);
   for (size_t k = 0; s == CF_OK && k < capture->spec.num_images; ++k)
     for (int j = 0; j < spec_light->count; ++j) {

@@ -227,7 +227,9 @@ static cf_status classify_normal_map(cf_capture *capture, cf_error *err) {
 
 static cf_status read_normal_map(cf_capture *capture, cf_error *err) {
   const char *path = capture->spec.normal_map;
-  cf_status s = cf_image_read(path, &capture->normal_map, NULL, err);
+  /* the size its header declared (capture_read_headers) */
+  const int width = capture->normal_map.width, height = capture->normal_map.height;
+  cf_status s = cf_image_read_sized(path, width, height, &capture->normal_map, NULL, err);
   if (s == CF_OK && capture->normal_map.channels < 3)
     s = cf_error_set(err, CF_EINVAL, "%s: a normal map needs 3 channels, it has %d", path,
                      capture->normal_map.channels);

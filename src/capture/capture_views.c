@@ -88,6 +88,24 @@ cf_status capture_check_size(cf_capture *capture, size_t k, const cf_image *imag
   return CF_OK;
 }
 
+/* What cameras record, per field of an exposure read from EXIF (or an
+ * OpenEXR file's attributes): an exposure time from 1/1,000,000 s (beyond
+ * the fastest shutters, 1/32,000 s mechanical or electronic) to 1 hour; an
+ * ISO from 1 to 10^7 (the highest extended settings reach 4.1 x 10^6); an
+ * f-number from 0.5 (the limit of a lens in air, by the Abbe sine
+ * condition) to 256 (beyond large-format lenses' f/128). Outside, the field
+ * is not a camera's: a fit would take it at its word (4294967295 s put the
+ * albedo at its bound, issue 30). */
+typedef struct exif_range {
+  const char *field;
+  unsigned tag;
+  float least, most; /* floats, as the fields are read: 1/1,000,000 s is in */
+  const char *unit;
+} exif_range;
+static const exif_range exif_ranges[3] = {{"exposure time", 0x829A, 1e-6f, 3600.0f, " s"},
+                                          {"ISO", 0x8827, 1.0f, 1e7f, ""},
+                                          {"f-number", 0x829D, 0.5f, 256.0f, ""}};
+
 cf_status capture_raw_exposure(const cf_capture *capture, size_t k, const cf_image_info *info,
                                double *exposure, cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
@@ -102,16 +120,57 @@ cf_status capture_raw_exposure(const cf_capture *capture, size_t k, const cf_ima
       break;
   }
   /* exposure ∝ t S / N² (time, ISO sensitivity, f-number) */
-  double t = info->exposure_time, iso = info->iso, n = info->f_number;
-  if (!(t > 0.0 && isfinite(t)) || !(iso > 0.0 && isfinite(iso)) || !(n > 0.0 && isfinite(n)))
-    return cf_error_set(err, CF_ENOTFOUND,
-                        "%s: colour.exposure is \"exif\" but the image's EXIF lacks a positive "
-                        "%s (exposure time %g s, ISO %g, f-number %g)",
-                        spec->image_paths[k],
-                        !(t > 0.0 && isfinite(t))       ? "exposure time"
-                        : !(iso > 0.0 && isfinite(iso)) ? "ISO"
-                                                        : "f-number",
-                        t, iso, n);
+  const double values[3] = {info->exposure_time, info->iso, info->f_number};
+  for (int i = 0; i < 3; ++i) {
+    const exif_range *r = &exif_ranges[i];
+    if (!(values[i] > 0.0 && isfinite(values[i])))
+      return cf_error_set(err, CF_ENOTFOUND,
+                          "%s: colour.exposure is \"exif\" but the image's EXIF lacks a positive "
+                          "%s (exposure time %g s, ISO %g, f-number %g)",
+                          spec->image_paths[k], r->field, values[0], values[1], values[2]);
+    if (values[i] < (double)r->least || values[i] > (double)r->most)
+      return cf_error_set(err, CF_EINVAL,
+                          "%s: the EXIF %s (tag 0x%04X) is %.10g%s, outside [%g, %g]%s, the range "
+                          "cameras record; colour.exposure is \"exif\"",
+                          spec->image_paths[k], r->field, r->tag, values[i], r->unit,
+                          (double)r->least, (double)r->most, r->unit);
+  }
+  const double t = values[0], iso = values[1], n = values[2];
   *exposure = t * iso / (n * n);
+  return CF_OK;
+}
+
+/* The most an image's EXIF exposure may differ from the capture's median,
+ * as a factor either way: 2^16, 16 stops, more than a raw sensor's dynamic
+ * range (about 14 stops), so no photo that far from the others shares
+ * usable pixels with them; it is a wrong EXIF field, which the fit would
+ * take at its word. */
+#define MOST_EXPOSURE_SPREAD 65536.0
+
+static int compare_doubles(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+
+cf_status capture_check_exposure_spread(const cf_capture *capture, cf_error *err) {
+  const size_t n = capture->spec.num_images;
+  double *sorted = malloc((n ? n : 1) * sizeof *sorted);
+  if (!sorted) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu exposures", n);
+  memcpy(sorted, capture->raw_exposures, n * sizeof *sorted);
+  qsort(sorted, n, sizeof *sorted, compare_doubles);
+  const double median = n ? sorted[(n - 1) / 2] : 1.0; /* the lower middle one */
+  free(sorted);
+  for (size_t k = 0; k < n; ++k) {
+    const double e = capture->raw_exposures[k];
+    const double ratio = e > median ? e / median : median / e;
+    if (ratio > MOST_EXPOSURE_SPREAD)
+      return cf_error_set(err, CF_EINVAL,
+                          "%s: its EXIF exposure (time x ISO / f-number^2) %.6g is %.3g times %s "
+                          "the capture's median %.6g; at most 65536 (16 stops, more than a "
+                          "sensor's range) is taken as a camera's, so one of its EXIF fields is "
+                          "likely wrong (give the exposures in images.exposures, \"exposure\": \"given\", instead)",
+                          capture->spec.image_paths[k], e, ratio, e > median ? "above" : "below",
+                          median);
+  }
   return CF_OK;
 }

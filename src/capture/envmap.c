@@ -35,9 +35,31 @@ static double luminance(const double rgb[3]) {
   return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
 }
 
-/* A value the map may use: negative and non-finite values count as 0. */
+/* A value the map may use: negative values count as 0 (non-finite ones
+ * were refused by check_finite). */
 static double usable(float value) {
-  return isfinite(value) && value > 0.0f ? (double)value : 0.0;
+  return value > 0.0f ? (double)value : 0.0;
+}
+
+/* CF_EINVAL at the first NaN or infinity of the first three channels (a
+ * 4th is ignored): a map is radiance, and a non-finite texel is a broken
+ * file, not a light to guess at. */
+static cf_status check_finite(const cf_image *map, cf_error *err) {
+  const size_t pixels = (size_t)map->width * (size_t)map->height;
+  size_t count = 0, first = 0;
+  int first_channel = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    for (int c = 0; c < 3; ++c)
+      if (!isfinite(map->pixels[i * (size_t)map->channels + (size_t)c]) && count++ == 0)
+        first = i, first_channel = c;
+  if (count == 0) return CF_OK;
+  const float v = map->pixels[first * (size_t)map->channels + (size_t)first_channel];
+  return cf_error_set(err, CF_EINVAL,
+                      "environment map: %zu non-finite value%s (NaN or infinity); the first is "
+                      "%s at texel (%zu, %zu) (column, row from the top-left), channel %d (%c)",
+                      count, count == 1 ? "" : "s", isnan(v) ? "NaN" : "an infinity",
+                      first % (size_t)map->width, first / (size_t)map->width, first_channel,
+                      "RGB"[first_channel]);
 }
 
 /* The map's geometry: per-row solid angle and polar angle, per-column
@@ -64,7 +86,7 @@ static double rect_energy(const geometry *g, int x0, int y0, int x1, int y1) {
   return e > 0.0 ? e : 0.0; /* rounding of the differences */
 }
 
-/* Geometry tables and the summed-area table; counts the unusable values
+/* Geometry tables and the summed-area table; counts the negative values
  * and sums Σ L dω per channel. */
 static void build(geometry *g, cf_envmap_report *report) {
   const int w = g->width, h = g->height;
@@ -94,7 +116,7 @@ static void build(geometry *g, cf_envmap_report *report) {
       for (int c = 0; c < 3; ++c) {
         const float v = row[(size_t)x * (size_t)g->channels + (size_t)c];
         rgb[c] = usable(v);
-        if (!(isfinite(v) && v >= 0.0f)) ++clamped;
+        if (v < 0.0f) ++clamped;
         total[c] += rgb[c] * g->d_omega[y];
       }
       running += luminance(rgb) * g->d_omega[y];
@@ -273,6 +295,7 @@ cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], in
                         map->width, map->height);
   if (!rotation) rotation = identity;
   cf_status status = cf_envmap_check_rotation(rotation, err);
+  if (status == CF_OK) status = check_finite(map, err);
   if (status != CF_OK) return status;
 
   geometry g = {map->width, map->height, map->channels, map->pixels, 0, 0, 0, 0, 0, 0};

@@ -35,7 +35,7 @@ typedef struct cf_directional_light {
 void cf_envmap_direction(int width, int height, double x, double y, double d[3]);
 
 typedef struct cf_envmap_report {
-  size_t clamped;  /* negative or non-finite values set to 0 */
+  size_t clamped;  /* negative values set to 0 */
   double total[3]; /* Σ L dω over the map, per channel (irradiance units) */
 } cf_envmap_report;
 
@@ -54,10 +54,12 @@ cf_status cf_envmap_check_rotation(const double rotation[9], cf_error *err);
  * Σ L dω per channel, so the lights' total equals the map's. Where that
  * mean vanishes (a region without light, or whose light balances out, as
  * a whole uniform map does for k = 1) the light is at the region's centre.
- * Negative or non-finite values (of the first three channels) count as 0
- * and are reported (the caller warns). `lights` holds k entries; rotation
- * NULL means the identity; report may be NULL. CF_EINVAL for a bad map,
- * k, or a rotation that is not orthonormal (to 1e-6) or not finite. */
+ * Negative values (of the first three channels) count as 0 and are
+ * reported (the caller warns); a NaN or infinity there is refused, naming
+ * the first one's texel and channel. `lights` holds k entries; rotation
+ * NULL means the identity; report may be NULL. CF_EINVAL for a bad map
+ * (non-finite values too), k, or a rotation that is not orthonormal (to
+ * 1e-6) or not finite. */
 cf_status cf_envmap_median_cut(const cf_image *map, const double rotation[9], int k,
                                cf_directional_light *lights, cf_envmap_report *report,
                                cf_error *err);

@@ -72,3 +72,32 @@ if(NOT CLAYFIT_SANITIZE)
   set_tests_properties(capture_hostile_out_of_memory PROPERTIES LABELS capture
                        SKIP_RETURN_CODE 77)
 endif()
+
+# Issue 30, item 5: a JPEG cut short or with noise in its coded data is
+# refused (exit 2, naming the file), not decoded as grey. clayfit's codec
+# fails the read on any libjpeg warning (image_jpeg.c).
+hostile_loads(jpeg_ok)
+hostile_capture(jpeg_cut_scan 2 "jpeg_cut_scan/images/001.jpg: decoding failed: libjpeg: Premature end of JPEG file")
+hostile_capture(jpeg_half 2 "jpeg_half/images/001.jpg: decoding failed: libjpeg: Premature end of JPEG file")
+hostile_capture(jpeg_no_eoi 2 "jpeg_no_eoi/images/001.jpg: decoding failed: libjpeg: Premature end of JPEG file")
+hostile_capture(jpeg_noise 2 "jpeg_noise/images/001.jpg: decoding failed: libjpeg: Corrupt JPEG data")
+hostile_capture(jpeg_noise_run 2 "jpeg_noise_run/images/001.jpg: decoding failed: libjpeg: Corrupt JPEG data")
+# item 8: each EXIF field bounded to what cameras record, and an exposure
+# more than 2^16 from the capture's median refused
+hostile_capture(exif_time_huge 2 "exif_time_huge/images/001.jpg: the EXIF exposure time \\(tag 0x829A\\) is 4294967296 s, outside \\[1e-06, 3600\\] s")
+hostile_capture(exif_time_tiny 2 "exif_time_tiny/images/001.jpg: the EXIF exposure time \\(tag 0x829A\\) is 2.3283064[0-9]*e-10 s, outside \\[1e-06, 3600\\] s")
+hostile_capture(exif_f_huge 2 "exif_f_huge/images/001.jpg: the EXIF f-number \\(tag 0x829D\\) is 4294967296, outside \\[0.5, 256\\]")
+hostile_capture(exif_iso_huge 2 "exif_iso_huge/images/001.jpg: the EXIF ISO \\(tag 0x8827\\) is 4294967296, outside \\[1, 1e\\+07\\]")
+hostile_capture(exif_spread 2 "exif_spread/images/001.jpg: its EXIF exposure .* is [0-9.e+]+ times above the capture's median .*at most 65536")
+# item 13: a NaN in an environment map is refused, not set to 0
+hostile_loads(env_ok)
+hostile_capture(env_nan 2 "env_nan/sky.pfm: environment map: 1 non-finite value \\(NaN or infinity\\); the first is NaN at texel \\(5, 21\\) \\(column, row from the top-left\\), channel 2 \\(B\\)")
+# item 10: the maps' headers read before any decoding, their sizes against
+# the images' and their decoded bytes counted in the cap
+hostile_capture(normal_bomb 2 "normal_bomb/normals.png: the normal map is 26000 x 26000 pixels but .*000.png is 32 x 32 \\(from its header, before decoding\\)")
+hostile_capture(env_bomb 2 "env_bomb/capture.json: the maps up to the environment map .*env_bomb/sky.png \\(26000 x 26000 x 3\\) decode to 8.11 GB .*more than the cap of 1 GB" --max-image-memory 1)
+add_test(NAME capture_hostile_map_cap
+         COMMAND ${CHECK} --exit 2 --stderr "env_ok/capture.json: the maps and the images up to 000.png \\(1 of 3; 32 x 32 x 1 the last\\) and their masks decode to 4.1e-05 GB.*more than the cap of 4e-05 GB" --
+                 ${CLAYFIT} inspect --max-image-memory 0.00004 ${HOSTILE}/env_ok/capture.json)
+set_tests_properties(capture_hostile_map_cap PROPERTIES LABELS "capture;cli"
+                     FIXTURES_REQUIRED hostile_captures)

@@ -23,9 +23,31 @@ Written here (orthographic camera, a normal map, DiLiGenT's text files):
   text_nul         a NUL byte in light_directions.txt, line 2
   bom_path         images.files instead of the list, the first name after a
                    UTF-8 byte-order mark
+  env_nan          an environment light whose map (PFM) has a NaN at texel
+                   (5, 21), channel 2
+  env_bomb         the environment map a PNG whose header claims 26000 x 26000
+  normal_bomb      the normal map a PNG whose header claims 26000 x 26000
+  env_ok           the environment map fine (64 x 32, the cap's test)
+From `clayfit synth --format jpg --exif-exposures` (issue 30, items 5 and 8),
+images/001.jpg changed:
+  jpeg_ok          unchanged
+  jpeg_cut_scan    cut 10 bytes into its scan (after the SOS header)
+  jpeg_half        cut in half
+  jpeg_no_eoi      without its end-of-image marker (the last 2 bytes)
+  jpeg_noise       1 % of its entropy-coded bytes replaced by random bytes
+                   (seed 3; libjpeg warns of corrupt data)
+  jpeg_noise_run   16 random bytes in the middle of its scan (seed 7)
+  exif_time_huge   EXIF exposure time 4294967295/1 s
+  exif_time_tiny   EXIF exposure time 1/4294967295 s
+  exif_f_huge      EXIF f-number 4294967295/1
+  exif_iso_huge    EXIF ISO a LONG 4294967295
+  exif_spread      EXIF exposure time 1000 s, each field in range, but
+                   10^5 times the others' (1/100 s at ISO 100, f/4)
 """
 import json
+import math
 import os
+import random
 import shutil
 import struct
 import subprocess
@@ -163,6 +185,109 @@ def text_cases(root):
               lambda d: d.__setitem__("images", {"files": ["\ufeff" + names[0]] + names[1:]}))
 
 
+def write_pfm(path, width, height, texel):
+    """An RGB PFM map, texel(x, y) its value at column x and row y from the
+    top (PFM stores the rows bottom to top)."""
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (width, height))
+        for y in reversed(range(height)):
+            f.write(b"".join(struct.pack("<3f", *texel(x, y)) for x in range(width)))
+
+
+def map_cases(root):
+    """From text_ok: an environment light instead of the directional ones,
+    and the maps broken."""
+    ok = os.path.join(root, "text_ok")
+
+    def case(name, light_file):
+        path = os.path.join(root, name)
+        shutil.copytree(ok, path)
+        edit_json(os.path.join(path, "capture.json"), lambda d: d.__setitem__(
+            "lights", [{"type": "environment", "file": light_file, "count": 8}]))
+        return path
+
+    sky = lambda x, y: (50.0, 50.0, 50.0) if y < 8 and 20 <= x < 26 else (0.2, 0.2, 0.2)
+    write_pfm(os.path.join(case("env_ok", "sky.pfm"), "sky.pfm"), 64, 32, sky)
+    write_pfm(os.path.join(case("env_nan", "sky.pfm"), "sky.pfm"), 64, 32,
+              lambda x, y: (0.2, 0.2, math.nan) if (x, y) == (5, 21) else sky(x, y))
+    bomb = os.path.join(case("env_bomb", "sky.png"), "sky.png")
+    write_png(bomb, 64, 32, 2, 8, 40)
+    patch_png_size(bomb, 26000, 26000)
+    normals = os.path.join(case("normal_bomb", "sky.pfm"), "normals.png")
+    write_pfm(os.path.join(root, "normal_bomb", "sky.pfm"), 64, 32, sky)
+    write_png(normals, 32, 32, 2, 8, 255)
+    patch_png_size(normals, 26000, 26000)
+    edit_json(os.path.join(root, "normal_bomb", "capture.json"),
+              lambda d: d["geometry"].__setitem__("file", "normals.png"))
+
+
+def jpeg_scan_start(data):
+    """The first byte of the entropy-coded data: after the SOS segment."""
+    at = 2
+    while True:
+        assert data[at] == 0xFF, "a JPEG marker at byte %d" % at
+        marker, length = data[at + 1], data[at + 2] << 8 | data[at + 3]
+        if marker == 0xDA:
+            return at + 2 + length
+        at += 2 + length
+
+
+def patch_exif(data, tag, kind, value):
+    """The JPEG's EXIF entry `tag` (in the Exif SubIFD clayfit's writer
+    makes: little-endian TIFF) given the type kind (3 SHORT, 4 LONG, 5
+    RATIONAL) and value: an int, or (numerator, denominator) written where
+    the entry's rational was."""
+    data = bytearray(data)
+    at = data.index(b"Exif\0\0") + 6
+    u16 = lambda o: struct.unpack_from("<H", data, at + o)[0]
+    u32 = lambda o: struct.unpack_from("<I", data, at + o)[0]
+
+    def entries(ifd):
+        return [ifd + 2 + 12 * i for i in range(u16(ifd))]
+
+    sub = next(u32(e + 8) for e in entries(u32(4)) if u16(e) == 0x8769)
+    entry = next(e for e in entries(sub) if u16(e) == tag)
+    if kind == 5:
+        struct.pack_into("<HII", data, at + entry + 2, 5, 1, u32(entry + 8))
+        struct.pack_into("<II", data, at + u32(entry + 8), *value)
+    else:
+        struct.pack_into("<HII", data, at + entry + 2, kind, 1, value)
+    return bytes(data)
+
+
+def jpeg_cases(clayfit, root):
+    base = os.path.join(root, "base_jpg")
+    subprocess.run([clayfit, "--quiet", "synth", "-o", base, "--images", "3", "--size",
+                    "96x72", "--format", "jpg", "--exif-exposures", "--masks",
+                    "--supersample", "1", "--seed", "4"], check=True)
+    photo = open(os.path.join(base, "images", "001.jpg"), "rb").read()
+    scan = jpeg_scan_start(photo)
+
+    def case(name, data):
+        path = os.path.join(root, name)
+        shutil.copytree(base, path)
+        open(os.path.join(path, "images", "001.jpg"), "wb").write(data)
+
+    def noise(seed, runs, length):
+        rng, data = random.Random(seed), bytearray(photo)
+        for _ in range(runs):
+            at = rng.randrange(scan, len(photo) - 2 - length)
+            data[at:at + length] = bytes(rng.randrange(256) for _ in range(length))
+        return bytes(data)
+
+    case("jpeg_ok", photo)
+    case("jpeg_cut_scan", photo[:scan + 10])
+    case("jpeg_half", photo[:len(photo) // 2])
+    case("jpeg_no_eoi", photo[:-2])
+    case("jpeg_noise", noise(3, (len(photo) - scan) // 100, 1))
+    case("jpeg_noise_run", noise(7, 1, 16))
+    case("exif_time_huge", patch_exif(photo, 0x829A, 5, (4294967295, 1)))
+    case("exif_time_tiny", patch_exif(photo, 0x829A, 5, (1, 4294967295)))
+    case("exif_f_huge", patch_exif(photo, 0x829D, 5, (4294967295, 1)))
+    case("exif_iso_huge", patch_exif(photo, 0x8827, 4, 4294967295))
+    case("exif_spread", patch_exif(photo, 0x829A, 5, (1000, 1)))
+
+
 def main():
     if len(sys.argv) != 3:
         print(__doc__, file=sys.stderr)
@@ -172,6 +297,8 @@ def main():
     os.makedirs(root)
     colmap_cases(clayfit, root)
     text_cases(root)
+    map_cases(root)
+    jpeg_cases(clayfit, root)
     return 0
 
 

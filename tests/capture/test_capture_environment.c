@@ -1,8 +1,9 @@
 /* An environment light in a capture file: a small equirectangular EXR with
- * a bright patch, a negative value and a NaN, reduced to K directional
+ * a bright patch and two negative values, reduced to K directional
  * lights: every observation carries K light slots, the lights' irradiance
- * adds up to the map's Σ L dω, and the two bad values are clamped to 0
- * with a warning naming the file. With the real HDRIs (../shared/data/hdri,
+ * adds up to the map's Σ L dω, and the negative values are clamped to 0
+ * with a warning naming the file. The same map with a NaN is refused,
+ * naming the file, the texel and the channel. With the real HDRIs (../shared/data/hdri,
  * when present), their known negative values are reported likewise. */
 #include <math.h>
 #include <stdio.h>
@@ -61,7 +62,7 @@ int main(int argc, char **argv) {
   CHECK(cf_image_alloc(&photo, ORTHO_SIZE, ORTHO_SIZE, 3, &err) == CF_OK, "alloc");
   CHECK(cf_image_alloc(&map, MAP_W, MAP_H, 3, &err) == CF_OK, "alloc");
   ortho_scene(&normals, &photo, up);
-  /* a dim sky, a bright patch, one negative value and one NaN; the map's
+  /* a dim sky, a bright patch, two negative values; the map's
    * Σ L dω with dω = (2π/W)(π/H) sin θ */
   double expected[3] = {0.0, 0.0, 0.0};
   for (int y = 0; y < MAP_H; ++y)
@@ -75,7 +76,7 @@ int main(int argc, char **argv) {
         expected[c] += (x == 40 && y == 20) || (x == 41 && y == 20) ? 0.0 : p[c] * d_omega;
     }
   map.pixels[3 * (20 * MAP_W + 40)] = -7.0f;
-  map.pixels[3 * (20 * MAP_W + 41) + 1] = strtof("nan", NULL);
+  map.pixels[3 * (20 * MAP_W + 41) + 1] = -0.5f;
   /* the clamped pixels count 0 in their bad channel only */
   {
     double theta = 3.14159265358979 * 20.5 / MAP_H;
@@ -89,6 +90,9 @@ int main(int argc, char **argv) {
   snprintf(path, sizeof path, "%s/photo.exr", dir);
   CHECK(cf_image_write(path, &photo, 32, &err) == CF_OK, "%s", err.message);
   snprintf(path, sizeof path, "%s/sky.exr", dir);
+  CHECK(cf_image_write(path, &map, 32, &err) == CF_OK, "%s", err.message);
+  map.pixels[3 * (21 * MAP_W + 5) + 2] = strtof("nan", NULL);
+  snprintf(path, sizeof path, "%s/nan.exr", dir);
   CHECK(cf_image_write(path, &map, 32, &err) == CF_OK, "%s", err.message);
   cf_image_free(&normals);
   cf_image_free(&photo);
@@ -107,9 +111,21 @@ int main(int argc, char **argv) {
       CHECK(fabs(total[c] - expected[c]) < 1e-6 * expected[c], "channel %d total", c);
     const char *warning = cf_capture_warning(capture, 0);
     printf("warning: %s\n", warning ? warning : "(none)");
-    CHECK(warning && strstr(warning, "sky.exr") && strstr(warning, "2 negative or non-finite"),
+    CHECK(warning && strstr(warning, "sky.exr") && strstr(warning, "2 negative values clamped"),
           "the clamped values are reported");
     cf_capture_free(capture);
+  }
+  /* a NaN: refused, not clamped */
+  write_capture("nan.exr", K);
+  {
+    snprintf(path, sizeof path, "%s/capture.json", dir);
+    cf_capture *refused = NULL;
+    cf_status s = cf_capture_load(path, NULL, &refused, &err);
+    printf("with a NaN: %s\n", err.message);
+    CHECK(s == CF_EINVAL && strstr(err.message, "nan.exr: environment map: 1 non-finite value") &&
+              strstr(err.message, "NaN at texel (5, 21)") && strstr(err.message, "channel 2 (B)"),
+          "a NaN in the map is refused: %s", err.message);
+    cf_capture_free(refused);
   }
 
   /* the real HDRIs, when present */
