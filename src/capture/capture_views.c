@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/order_statistics.h"
 #include "capture_internal.h"
 #include "core/file.h"
 
@@ -147,19 +148,14 @@ cf_status capture_raw_exposure(const cf_capture *capture, size_t k, const cf_ima
  * take at its word. */
 #define MOST_EXPOSURE_SPREAD 65536.0
 
-static int compare_doubles(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
 cf_status capture_check_exposure_spread(const cf_capture *capture, cf_error *err) {
   const size_t n = capture->spec.num_images;
-  double *sorted = malloc((n ? n : 1) * sizeof *sorted);
-  if (!sorted) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu exposures", n);
-  memcpy(sorted, capture->raw_exposures, n * sizeof *sorted);
-  qsort(sorted, n, sizeof *sorted, compare_doubles);
-  const double median = n ? sorted[(n - 1) / 2] : 1.0; /* the lower middle one */
-  free(sorted);
+  if (n == 0) return CF_OK;
+  double *values = malloc(n * sizeof *values);
+  if (!values) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu exposures", n);
+  memcpy(values, capture->raw_exposures, n * sizeof *values);
+  const double median = order_median(values, n);
+  free(values);
   for (size_t k = 0; k < n; ++k) {
     const double e = capture->raw_exposures[k];
     const double ratio = e > median ? e / median : median / e;
