@@ -69,6 +69,14 @@ typedef struct cf_image_header {
  * (lengths only): one that ends before its IEND chunk is CF_EIO. */
 cf_status cf_image_read_header(const char *path, cf_image_header *header, cf_error *err);
 
+/* The bytes the header's pixels take once decoded, as 32-bit floats: what
+ * the decoded-data caps (--max-image-memory) count before decoding. */
+unsigned long long cf_image_header_bytes(const cf_image_header *header);
+
+/* s, with " (from its header, before decoding)" added to err's message
+ * when s is an error: a refusal from a header says nothing was decoded. */
+cf_status cf_image_header_refusal(cf_status s, cf_error *err);
+
 /* CF_EINVAL naming `path`, the first non-finite value's pixel (x, y) and
  * channel, and how many there are, if the image holds NaN or Inf. */
 cf_status cf_image_check_finite(const cf_image *image, const char *path, cf_error *err);

@@ -275,21 +275,6 @@ static void warn_mixed_samples(cf_capture *capture, const size_t counts[SAMPLE_K
                list);
 }
 
-/* The bytes image data of this header decode to (32-bit floats). */
-static unsigned long long decoded_bytes(const cf_image_header *h) {
-  return (unsigned long long)h->width * (unsigned long long)h->height *
-         (unsigned long long)h->channels * sizeof(float);
-}
-
-/* An error about a size read from a header says that nothing was decoded. */
-static cf_status from_header(cf_status s, cf_error *err) {
-  if (s != CF_OK && err) {
-    size_t n = strlen(err->message);
-    snprintf(err->message + n, sizeof err->message - n, " (from its header, before decoding)");
-  }
-  return s;
-}
-
 /* Image k's header against its camera (capture_check_size, which records
  * its size), the normal map's header and its mask's header (or the shared
  * mask's). */
@@ -298,12 +283,12 @@ static cf_status check_header(cf_capture *capture, size_t k, const cf_image_head
   const cf_capture_spec *spec = &capture->spec;
   cf_status s = cf_image_read_header(spec->image_paths[k], h, err);
   if (s != CF_OK) return s;
-  *bytes += decoded_bytes(h);
+  *bytes += cf_image_header_bytes(h);
   cf_image as_declared = {h->width, h->height, h->channels, NULL};
-  if ((s = from_header(capture_check_size(capture, k, &as_declared, err), err)) != CF_OK) return s;
+  if ((s = cf_image_header_refusal(capture_check_size(capture, k, &as_declared, err), err)) != CF_OK) return s;
   const cf_image *map = &capture->normal_map; /* its header's size (map_headers) */
   if (spec->normal_map && (map->width != h->width || map->height != h->height))
-    return from_header(
+    return cf_image_header_refusal(
         cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
                      spec->normal_map, map->width, map->height, spec->image_paths[k], h->width,
                      h->height),
@@ -313,11 +298,11 @@ static cf_status check_header(cf_capture *capture, size_t k, const cf_image_head
   const cf_image_header *mask = mask_shared;
   if (!mask) {
     if ((s = cf_image_read_header(spec->mask_paths[k], &own, err)) != CF_OK) return s;
-    *bytes += decoded_bytes(&own);
+    *bytes += cf_image_header_bytes(&own);
     mask = &own;
   }
   if (mask->width == h->width && mask->height == h->height) return CF_OK;
-  return from_header(
+  return cf_image_header_refusal(
       cf_error_set(err, CF_EINVAL, "%s: the mask is %d x %d pixels but %s is %d x %d",
                    spec->mask_paths[k], mask->width, mask->height, spec->image_paths[k], h->width,
                    h->height),
@@ -352,7 +337,7 @@ static cf_status map_headers(cf_capture *capture, unsigned long long cap,
     *maps = 1;
     s = cf_image_read_header(spec->normal_map, &h, err);
     if (s == CF_OK) {
-      *bytes += decoded_bytes(&h);
+      *bytes += cf_image_header_bytes(&h);
       capture->normal_map.width = h.width, capture->normal_map.height = h.height;
       snprintf(what, sizeof what, "the normal map %s (%d x %d x %d)", spec->normal_map, h.width,
                h.height, h.channels);
@@ -364,7 +349,7 @@ static cf_status map_headers(cf_capture *capture, unsigned long long cap,
     if (spec->lights[i].kind != CF_LIGHT_SPEC_ENVIRONMENT) continue;
     *maps = 1;
     if ((s = cf_image_read_header(file, &h, err)) != CF_OK) break;
-    *bytes += decoded_bytes(&h);
+    *bytes += cf_image_header_bytes(&h);
     snprintf(what, sizeof what, "the maps up to the environment map %s (%d x %d x %d)", file,
              h.width, h.height, h.channels);
     s = check_cap(capture, *bytes, cap, what, err);
@@ -399,7 +384,7 @@ cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *op
   cf_image_header shared;
   if (s == CF_OK && one_mask) {
     s = cf_image_read_header(spec->mask_paths[0], &shared, err);
-    bytes += decoded_bytes(&shared);
+    bytes += cf_image_header_bytes(&shared);
   }
   size_t counts[SAMPLE_KINDS] = {0}, first[SAMPLE_KINDS] = {0};
   for (size_t k = 0; s == CF_OK && k < spec->num_images; ++k) {

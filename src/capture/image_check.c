@@ -1,6 +1,8 @@
-/* Finite-value check of an image (include/clayfit/image.h). */
+/* Checks of an image and of a header (include/clayfit/image.h). */
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <string.h>
 
 #include "clayfit/image.h"
 
@@ -23,4 +25,17 @@ cf_status cf_image_check_finite(const cf_image *image, const char *path, cf_erro
                       "(%d, %d), channel %d",
                       name, count, count == 1 ? "" : "s",
                       isnan(image->pixels[first]) ? "NaN" : "an infinity", x, y, channel);
+}
+
+unsigned long long cf_image_header_bytes(const cf_image_header *header) {
+  return (unsigned long long)header->width * (unsigned long long)header->height *
+         (unsigned long long)header->channels * sizeof(float);
+}
+
+cf_status cf_image_header_refusal(cf_status s, cf_error *err) {
+  if (s != CF_OK && err) {
+    size_t n = strlen(err->message);
+    snprintf(err->message + n, sizeof err->message - n, " (from its header, before decoding)");
+  }
+  return s;
 }

@@ -47,9 +47,6 @@ typedef struct cli_headers {
 struct cf_image_header;
 cf_status cli_read_header(cli_headers *t, const char *path, struct cf_image_header *h,
                           cf_error *err);
-/* s, with " (from its header, before decoding)" after err's message when
- * it is an error: a size refused from a header. */
-cf_status cli_from_header(cf_status s, cf_error *err);
 
 /* A progress line on stderr ("clayfit synth: rendering images 5/16"),
  * rewritten in place; user is the command's name. Ends the line when

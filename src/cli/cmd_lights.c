@@ -189,20 +189,11 @@ static void run_free(lights_run *r, int photos, int masks) {
   cf_colmap_model_free(&r->model);
 }
 
-cf_status cli_from_header(cf_status s, cf_error *err) {
-  if (s != CF_OK && err) {
-    size_t n = strlen(err->message);
-    snprintf(err->message + n, sizeof err->message - n, " (from its header, before decoding)");
-  }
-  return s;
-}
-
 cf_status cli_read_header(cli_headers *t, const char *path, cf_image_header *h, cf_error *err) {
   cf_status s = cf_image_read_header(path, h, err);
   if (s != CF_OK) return s;
   const unsigned long long cap = t->cap ? t->cap : CF_CAPTURE_MAX_IMAGE_BYTES;
-  t->bytes += (unsigned long long)h->width * (unsigned long long)h->height *
-              (unsigned long long)h->channels * sizeof(float);
+  t->bytes += cf_image_header_bytes(h);
   if (t->bytes <= cap) return CF_OK;
   return cf_error_set(err, CF_ERANGE,
                       "%s (%d x %d x %d): the photos and masks up to it decode to %.3g GB of "
@@ -233,7 +224,7 @@ static cf_status read_headers(const lights_args *a, lights_run *r, cf_error *err
       s = cf_error_set(err, CF_EINVAL,
                        "%s is %d x %d, %s is %d x %d: one outline cannot serve both", a->photos[k],
                        h->width, h->height, a->photos[0], first->width, first->height);
-    s = cli_from_header(s, err);
+    s = cf_image_header_refusal(s, err);
   }
   return s;
 }
@@ -301,7 +292,7 @@ static cf_status find_cameras(const lights_args *a, lights_run *r, cf_error *err
     const cf_camera *camera = cf_colmap_find_camera(&r->model, image->camera_id);
     const cf_image_header *h = &r->headers[k];
     if (!camera || camera->width != (uint64_t)h->width || camera->height != (uint64_t)h->height)
-      return cli_from_header(
+      return cf_image_header_refusal(
           cf_error_set(err, CF_EINVAL, "%s is %d x %d, its COLMAP camera %u is %llu x %llu",
                        a->photos[k], h->width, h->height, image->camera_id,
                        camera ? (unsigned long long)camera->width : 0ULL,

@@ -252,7 +252,7 @@ static cf_status read_headers(const probe_args *a, cf_image_header *first, cf_er
   cli_headers t = {a->max_image_bytes, 0};
   cf_status s = cli_read_header(&t, a->photos[0], first, err);
   if (s == CF_OK && (long)first->width * first->height > MAX_PIXELS)
-    s = cli_from_header(
+    s = cf_image_header_refusal(
         cf_error_set(err, CF_EINVAL, "%s: %d x %d pixels is more than a light probe needs",
                      a->photos[0], first->width, first->height),
         err);
@@ -262,7 +262,7 @@ static cf_status read_headers(const probe_args *a, cf_image_header *first, cf_er
     if (k == 0 || !path) continue;
     s = cli_read_header(&t, path, &h, err);
     if (s == CF_OK && (h.width != first->width || h.height != first->height))
-      s = cli_from_header(
+      s = cf_image_header_refusal(
           cf_error_set(err, CF_EINVAL, "%s is %d x %d pixels but %s is %d x %d: %s", path, h.width,
                        h.height, a->photos[0], first->width, first->height,
                        k < a->num_photos ? "brackets must be photos of one size"
