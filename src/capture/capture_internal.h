@@ -144,6 +144,12 @@ cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
 cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *options,
                                cf_error *err);
 
+/* observations.c: the brightest radiance any material of the ladder, with
+ * any parameters inside docs/model.md §1.6's ranges, reflects per unit
+ * irradiance (f·c_i at its largest over the light's direction) seen at
+ * cos_o = n·v (infinite for cos_o <= 0). */
+double capture_radiance_bound(double cos_o);
+
 /* Read every image (and its mask) and add its observations, in image
  * order, decoding ahead on other threads (capture_images.c), after
  * capture_read_headers. */

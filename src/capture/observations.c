@@ -12,6 +12,7 @@
 
 #include "capture_internal.h"
 #include "core/order_statistics.h"
+#include "core/vec.h"
 
 /* Make room for `extra` more observations (doubling). */
 static cf_status reserve(cf_capture *capture, size_t extra, cf_error *err) {
@@ -138,9 +139,13 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
 /* ---- The screen: values that cannot be radiance (docs/captures.md) ----
  * A channel is not radiance when it is below −NOISE_SIGMAS σ₀, σ₀ the
  * photo's noise at radiance 0 (the capture's read noise, or without a
- * noise model FALLBACK_NOISE times the image's bright level), or above
- * ABSURD times that level. The bright level is the BRIGHT_QUANTILE of the
- * image's positive values: robust to a tenth of them being wrong. */
+ * noise model FALLBACK_NOISE times the image's bright level), or above the
+ * brightest radiance any material of the ladder can reflect there under the
+ * capture's lights (MARGIN times capture_radiance_bound, plus NOISE_SIGMAS
+ * σ₀). When the lights' level is not known (relative radiometry, an unknown
+ * tone curve: the fit's scale is free) the upper bound is instead ABSURD
+ * times the bright level, the BRIGHT_QUANTILE of the image's positive
+ * values: robust to a tenth of them being wrong. */
 #define NOISE_SIGMAS 5.0 /* Gaussian noise beyond 5 σ: 3e-7 of the values */
 /* generous: raw photos' read noise is 0.1-1 % of full scale, so only values
  * far below any camera's noise are left out (-10 % of the bright level) */
@@ -149,12 +154,27 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
 /* the ladder's sharpest, strongest lobe (roughness 0.03, F0 0.25) peaks at
  * 7.7e4 times a white diffuse surface (clayfit eval): room for albedo 1e-4 */
 #define ABSURD 1e9
+/* two stops above the bound: the capture's exposures (EXIF's rounding) and
+ * the fit's corrections to them (--fit-exposures), a footprint's samples
+ * beside the pixel's centre; the patch of 1e6 of cli_fit_bright_patch is
+ * 3.3 times above it, real highlights (roughness >= 0.1) far below */
+#define MARGIN 4.0
+/* π f c_i of the ladder over docs/model.md §1.6's ranges, searched by
+ * test_radiance_bound: 8.2e4 at c_o = 1 (M4: r 0.03, F0 0.25 on both
+ * lobes), 8.8e4 at 0.93, 3.0e5 at 0.33, 1.8e6 at 0.1, 8.7e6 at 0.03 (the
+ * lobe's 1/(4 c_o) and the Fresnel's rise); PEAK / c_o^1.5 is above all */
+#define PEAK 9e4
 #define MOST 0.5 /* more than half of the capture: the decoding is wrong */
+
+double capture_radiance_bound(double cos_o) {
+  return cos_o > 0.0 ? PEAK / (CF_PI * cos_o * sqrt(cos_o)) : INFINITY;
+}
 
 /* The bounds of radiance for observations [begin, end) of one image. */
 typedef struct radiance_bounds {
-  double low, high, sigma, bright;
+  double low, absurd, sigma, bright;
   int sigma_from_capture;
+  int lights_known; /* the lights' level is known: the model's bound applies */
 } radiance_bounds;
 
 static cf_status bounds_of(const cf_capture *capture, size_t begin, size_t end, radiance_bounds *b,
@@ -172,8 +192,22 @@ static cf_status bounds_of(const cf_capture *capture, size_t begin, size_t end, 
   b->sigma_from_capture = spec->has_noise && spec->noise_read > 0.0;
   b->sigma = b->sigma_from_capture ? spec->noise_read : FALLBACK_NOISE * b->bright;
   b->low = -NOISE_SIGMAS * b->sigma;
-  b->high = b->bright > 0.0 ? ABSURD * b->bright : INFINITY;
+  b->absurd = b->bright > 0.0 ? ABSURD * b->bright : INFINITY;
+  b->lights_known = !spec->radiometry_relative && !spec->tone_curve_unknown;
   return CF_OK;
+}
+
+/* The brightest radiance any material can reflect at observation i under
+ * its lights (with every light's irradiance, at the brightest channel). */
+static double brightest_at(const cf_observations *o, size_t i) {
+  const double *n = o->normal + 3 * i, *v = o->view + 3 * i;
+  const size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
+  const double *e = o->irradiance + 3 * slots * i;
+  double channel[3] = {0.0, 0.0, 0.0};
+  for (size_t j = 0; j < slots; ++j)
+    for (int c = 0; c < 3; ++c) channel[c] += e[3 * j + c];
+  double irradiance = fmax(channel[0], fmax(channel[1], channel[2]));
+  return capture_radiance_bound(n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) * irradiance;
 }
 
 /* Copy observation `from` over `to` (to < from). */
@@ -191,18 +225,21 @@ static void move_observation(cf_observations *o, size_t to, size_t from) {
   memcpy(o->pixel + 2 * to, o->pixel + 2 * from, 2 * sizeof *o->pixel);
 }
 
-/* What was left out of one image, for its warning. */
+/* What was left out of one image (for its warning), or of the capture. */
 typedef struct left_out_counts {
   size_t low, high;
   double lowest, highest;
-  float at[2]; /* the first such pixel's centre */
+  double limit;  /* the upper bound where the highest value is */
+  float at[2];   /* the first such pixel's centre */
+  double signal; /* capture: Σ (brightest / σ₀)² over the values kept */
+  double sigma;  /* capture: the largest image's σ₀ */
 } left_out_counts;
 
 static void warn_left_out(cf_capture *capture, size_t k, const radiance_bounds *b,
                           const left_out_counts *out) {
   const cf_capture_image *info = &capture->images[k];
   size_t total = info->observations + info->not_radiance;
-  char low[256] = "", high[160] = "";
+  char low[256] = "", high[256] = "";
   if (out->low && b->sigma_from_capture)
     snprintf(low, sizeof low,
              "; %zu with a value below %g (%g sigma, the capture's read noise %g; lowest %g)",
@@ -212,34 +249,42 @@ static void warn_left_out(cf_capture *capture, size_t k, const radiance_bounds *
              "; %zu with a value below %g (%g sigma, sigma %g %% of the image's bright level %g; "
              "lowest %g)",
              out->low, b->low, NOISE_SIGMAS, 100.0 * FALLBACK_NOISE, b->bright, out->lowest);
-  if (out->high)
+  if (out->high && b->lights_known)
+    snprintf(high, sizeof high,
+             "; %zu above the brightest radiance any material can reflect there under the "
+             "capture's lights (%g times the model's bound; highest %g where that is %g)",
+             out->high, MARGIN, out->highest, out->limit);
+  else if (out->high)
     snprintf(high, sizeof high, "; %zu above %g (%g times the bright level; highest %g)", out->high,
-             b->high, ABSURD, out->highest);
+             b->absurd, ABSURD, out->highest);
   capture_warn(capture,
                "%s: %zu of its %zu pixels on the sphere (%.2g %%) hold values that cannot be "
                "radiance and are left out of the fit%s%s; the first at pixel (%.0f, %.0f). "
-               "Check the black level, the encoding and the file",
+               "Check the black level, the encoding, the lights and the file",
                capture->spec.image_paths[k], info->not_radiance, total,
                100.0 * (double)info->not_radiance / (double)total, low, high, out->at[0] - 0.5,
                out->at[1] - 0.5);
 }
 
 /* Leave out image k's observations [begin, end) that hold a value that is
- * not radiance, moving the rest down to *kept. */
+ * not radiance, moving the rest down to *kept; add its counts to *all. */
 static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_t end, size_t *kept,
-                              cf_error *err) {
+                              left_out_counts *all, cf_error *err) {
   cf_observations *o = &capture->obs;
   cf_capture_image *info = &capture->images[k];
-  radiance_bounds b = {0.0, 0.0, 0.0, 0.0, 0};
+  radiance_bounds b = {0};
   cf_status s = bounds_of(capture, begin, end, &b, err);
   if (s != CF_OK) return s;
-  left_out_counts out = {0, 0, 0.0, 0.0, {0.0f, 0.0f}};
+  left_out_counts out = {0};
   for (size_t i = begin; i < end; ++i) {
     int low = 0, high = 0;
+    double brightest = b.lights_known ? brightest_at(o, i) : INFINITY;
+    double limit = fmin(b.absurd, MARGIN * brightest + NOISE_SIGMAS * b.sigma);
     for (int c = 0; c < 3; ++c) {
       double v = o->rgb[3 * i + c];
       if (v < b.low) low = 1, out.lowest = fmin(out.lowest, v);
-      if (v > b.high) high = 1, out.highest = fmax(out.highest, v);
+      if (v > limit) high = 1;
+      if (v > limit && v > out.highest) out.highest = v, out.limit = limit;
     }
     if (low || high) {
       if (out.low + out.high == 0) memcpy(out.at, o->pixel + 2 * i, sizeof out.at);
@@ -250,11 +295,17 @@ static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_
     }
     if (*kept != i) move_observation(o, *kept, i);
     ++*kept;
+    double z = brightest / b.sigma;
+    all->signal += b.sigma > 0.0 ? z * z : INFINITY;
   }
+  all->sigma = fmax(all->sigma, b.sigma);
   info->not_radiance = out.low + out.high;
   info->observations -= info->not_radiance;
   if ((double)info->not_radiance > CF_NOT_RADIANCE_TRACE * (double)(end - begin))
     warn_left_out(capture, k, &b, &out);
+  all->low += out.low;
+  all->high += out.high;
+  if (out.highest > all->highest) all->highest = out.highest, all->limit = out.limit;
   return CF_OK;
 }
 
@@ -308,26 +359,47 @@ static usable count_usable(const cf_observations *o) {
   return u;
 }
 
+/* Refuse a capture that no light reaches (before the screen: with no
+ * light every value is above what the lights can give). */
+static cf_status check_reached(const cf_capture *capture, cf_error *err) {
+  const cf_observations *o = &capture->obs;
+  if (count_usable(o).irradiated > 0) return CF_OK;
+  return cf_error_set(err, CF_EINVAL,
+                      "%s: lights: no light reaches the sphere: every light gives zero "
+                      "irradiance at all %zu observations of the %zu images (are the lights' "
+                      "intensities 0?)",
+                      capture->spec.path, o->count, capture->spec.num_images);
+}
+
+/* Refuse a capture of which more than half of the values cannot be
+ * radiance: mostly too bright for the lights, or mostly far below 0. */
+static cf_status check_left_out(const cf_capture *capture, size_t total, const left_out_counts *out,
+                                cf_error *err) {
+  const cf_capture_spec *spec = &capture->spec;
+  size_t left_out = out->low + out->high;
+  if (!((double)left_out > MOST * (double)total)) return CF_OK;
+  double share = 100.0 * (double)left_out / (double)total;
+  if (out->high > out->low && isfinite(out->limit))
+    return cf_error_set(err, CF_EINVAL,
+                        "%s: lights: %zu of the %zu pixels on the sphere (%.3g %%) are brighter "
+                        "than any material can reflect under the capture's lights (the highest, "
+                        "%g, where %g is the most the lights allow): the lights are too weak to "
+                        "give these values (their intensities, or the photos' exposures or "
+                        "units, are wrong): nothing to fit",
+                        spec->path, left_out, total, share, out->highest, out->limit);
+  return cf_error_set(err, CF_EINVAL,
+                      "%s: colour: %zu of the %zu pixels on the sphere (%.3g %%) hold values "
+                      "that cannot be radiance (far below 0, or absurdly large; each image's "
+                      "count is in the warnings): the decoding is wrong (black_level %g?) or "
+                      "the photos are not radiance",
+                      spec->path, left_out, total, share, spec->black_level);
+}
+
 /* Refuse a capture whose observations leave nothing to fit, saying why. */
-static cf_status check_usable(const cf_capture *capture, size_t total, size_t left_out,
-                              cf_error *err) {
+static cf_status check_usable(const cf_capture *capture, cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
   const cf_observations *o = &capture->obs;
-  if ((double)left_out > MOST * (double)total)
-    return cf_error_set(err, CF_EINVAL,
-                        "%s: colour: %zu of the %zu pixels on the sphere (%.3g %%) hold values "
-                        "that cannot be radiance (far below 0, or absurdly large; each image's "
-                        "count is in the warnings): the decoding is wrong (black_level %g?) or "
-                        "the photos are not radiance",
-                        spec->path, left_out, total, 100.0 * (double)left_out / (double)total,
-                        spec->black_level);
   usable u = count_usable(o);
-  if (u.irradiated == 0)
-    return cf_error_set(err, CF_EINVAL,
-                        "%s: lights: no light reaches the sphere: every light gives zero "
-                        "irradiance at all %zu observations of the %zu images (are the lights' "
-                        "intensities 0?)",
-                        spec->path, o->count, spec->num_images);
   size_t k = 0;
   int j = 0;
   double distance = 0.0;
@@ -353,15 +425,24 @@ static cf_status check_usable(const cf_capture *capture, size_t total, size_t le
 
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err) {
   cf_observations *o = &capture->obs;
-  size_t total = o->count, kept = 0, begin = 0, left_out = 0;
-  while (begin < total) {
+  size_t total = o->count, kept = 0, begin = 0;
+  left_out_counts all = {0};
+  cf_status s = check_reached(capture, err);
+  while (s == CF_OK && begin < total) {
     size_t k = o->image[begin], end = begin;
     while (end < total && o->image[end] == k) ++end;
-    cf_status s = screen_image(capture, k, begin, end, &kept, err);
-    if (s != CF_OK) return s;
-    left_out += capture->images[k].not_radiance;
+    s = screen_image(capture, k, begin, end, &kept, &all, err);
     begin = end;
   }
+  if (s != CF_OK) return s;
   o->count = kept;
-  return check_usable(capture, total, left_out, err);
+  s = check_left_out(capture, total, &all, err);
+  if (s == CF_OK && all.signal < 1.0) /* (infinite when the lights' level is not known) */
+    s = cf_error_set(err, CF_EINVAL,
+                     "%s: lights: the lights are too weak to move any value beyond the noise: "
+                     "the brightest material the model allows would differ from a black one "
+                     "by chi2 %.3g over all %zu observations (below 1; the noise's sigma %g at "
+                     "radiance 0): nothing to fit",
+                     capture->spec.path, all.signal, kept, all.sigma);
+  return s == CF_OK ? check_usable(capture, err) : s;
 }

@@ -516,5 +516,6 @@ cf_status cf_fit_run(const cf_capture *capture, const cf_fit_options *o, cf_fit_
   if (s == CF_OK && !o->use_start) s = fit_check_gains(capture, o, &budget, err);
   if (s == CF_OK) s = fit_run_budget(capture, &budget, o, r, err);
   fit_budget_free(&budget);
+  if (s == CF_OK && (s = fit_check_constrained(r, err)) != CF_OK) cf_fit_result_free(r);
   return s;
 }

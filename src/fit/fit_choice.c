@@ -14,6 +14,7 @@
 #include "clayfit/model.h"
 #include "core/clock.h"
 #include "fit_gains.h"
+#include "fit_outcome.h"
 #include "fit_plan.h"
 #include "fit_problem.h"
 #include "fit_residuals.h"
@@ -514,6 +515,8 @@ cf_status cf_fit_auto(const cf_capture *capture, const cf_fit_options options[CF
   if (s == CF_OK) s = choose(capture, options, choice, err);
   if (s == CF_OK) s = fit_chosen(capture, options, &budget, choice, result, err);
   fit_budget_free(&budget);
+  if (s == CF_OK && (s = fit_check_constrained(result, err)) != CF_OK)
+    cf_fit_result_free(result);
   return s;
 }
 

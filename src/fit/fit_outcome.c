@@ -173,3 +173,19 @@ cf_status fit_outcome(const fit_problem *p, const fit_plan *plan, const double *
   warn_units(fit_problem_capture(p), o->model, r);
   return CF_OK;
 }
+
+cf_status fit_check_constrained(const cf_fit_result *r, cf_error *err) {
+  const cf_model_info *model = cf_model_info_get(r->model);
+  int fitted = 0, unconstrained = 0;
+  for (int k = 0; k < model->dim; ++k) {
+    fitted += r->status[k] == CF_PARAM_FITTED || r->status[k] == CF_PARAM_AT_BOUND;
+    unconstrained += r->status[k] == CF_PARAM_UNCONSTRAINED;
+  }
+  if (fitted > 0 || unconstrained == 0) return CF_OK;
+  return cf_error_set(err, CF_EINVAL,
+                      "nothing to fit: the capture constrains none of %s's parameters (each "
+                      "one's sd exceeds half its range, or no observation moves it): the lights "
+                      "are too weak, or the lit values too few or too noisy, to move any value "
+                      "beyond the noise",
+                      model->code);
+}

@@ -18,6 +18,10 @@ cf_status fit_outcome(const fit_problem *p, const fit_plan *plan, const double *
                       const cf_lsq_summary *summary, const cf_fit_options *o, int sampled,
                       double sigma2, cf_fit_result *r, cf_error *err);
 
+/* CF_EINVAL "nothing to fit" when the result has no parameter the capture
+ * constrains (none fitted, some not constrained), whatever the reason. */
+cf_status fit_check_constrained(const cf_fit_result *r, cf_error *err);
+
 /* Append a warning to the result (dropped beyond CF_FIT_MAX_WARNINGS). */
 void fit_add_warning(cf_fit_result *r, const char *format, ...)
     __attribute__((format(printf, 2, 3)));

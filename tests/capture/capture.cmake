@@ -101,3 +101,9 @@ clayfit_cli_test(error_synth_out_of_range --exit 2
   --stderr "parameter film_f0 of model clay is 0.5, outside its range" --
   ${CLAYFIT} synth -o ${CMAKE_CURRENT_BINARY_DIR}/never --param film_f0=0.5)
 include(capture/synth_environment.cmake)
+# The brightest radiance the ladder reflects per unit irradiance (the upper
+# bound of the screen of photo values, docs/captures.md): a search over the
+# models, their parameter ranges and the light's direction stays below it.
+clayfit_c_test(test_radiance_bound SOURCES capture/test_radiance_bound.c
+               LIBS clayfit_capture LABELS capture)
+target_include_directories(test_radiance_bound PRIVATE ${PROJECT_SOURCE_DIR}/src)

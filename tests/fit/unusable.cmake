@@ -29,6 +29,31 @@ unusable_capture(flash_inside
 unusable_capture(black_level
   "capture.json: colour: [0-9]+ of the 17376 pixels on the sphere \\(9[0-9.]+ %\\) hold values that cannot be radiance.*black_level 1")
 
+# Issue 30, item 7: lights far too weak for the photos (a flash of 1e-12 or
+# 1e-300, a map of 1e-44 texels). Exit 0 before: every model at 0 unknowns,
+# "M0 chosen", albedo 0.5 +- 0.
+set(TOO_WEAK "capture.json: lights: 17376 of the 17376 pixels on the sphere \\(100 %\\) are brighter than any material can reflect under the capture's lights .*the lights are too weak to give these values.*nothing to fit")
+unusable_capture(faint_flash "${TOO_WEAK}")
+unusable_capture(faintest_flash "${TOO_WEAK}")
+unusable_capture(faint_environment "${TOO_WEAK}")
+# photos of the noise alone under a flash of 1e-12: no parameter can be
+# constrained. Exit 0 before, albedo at its bounds (1, 1e-6, 1e-6).
+unusable_capture(dark
+  "capture.json: lights: the lights are too weak to move any value beyond the noise: .*chi2 [0-9.e+-]+ over all 17376 observations .*nothing to fit")
+# the flash at 1e-300 with relative radiometry (whose free scale leaves the
+# loader no bound): the fit ends with no parameter constrained, refused
+# whatever the reason. Exit 0 before, "M0 chosen", albedo 0.5 +- 0. About 5 s.
+unusable_capture(faintest_relative
+  "nothing to fit: the capture constrains none of M0's parameters")
+# the map at radiance 0.5, as rendered: nothing left out
+add_test(NAME cli_inspect_environment_clean
+         COMMAND ${CHECK} --schema ${SCHEMA}/inspect.schema.json
+                 --expect "[i['not_radiance'] for i in doc['images']] == [0, 0, 0, 0]"
+                 --expect "doc['observations'] == 17376 and doc['warnings'] == []"
+                 -- ${CLAYFIT} inspect --json ${UNUSABLE}/environment/capture.json)
+set_tests_properties(cli_inspect_environment_clean PROPERTIES LABELS "cli;capture"
+                     FIXTURES_REQUIRED unusable_captures)
+
 # A parameter no data move is "not constrained" (its Jacobian column is 0),
 # never "fitted": the blue albedo under a light with no blue. Before, M2's
 # start put it at its bound and it came out "fitted: at a bound", 1e-6.
@@ -59,6 +84,39 @@ add_test(NAME cli_fit_negative_patch
                     -o ${UNUSABLE}/negative_patch/fit)
 set_tests_properties(cli_fit_negative_patch PROPERTIES LABELS "cli;fit"
                      FIXTURES_REQUIRED unusable_captures FIXTURES_SETUP negative_patch_fit)
+# Issue 30, item 6: a patch of 1e6 in each image (2.3 % of each image's
+# pixels on the sphere), 3.3 times the brightest any material reflects there
+# under the flash (with the margin of 4), nine decades below 1e9 times the
+# bright level. Before: M2, albedo 0.27, relative RMSE 100 %, exit 0. Now
+# the patches are left out, counted and warned about, and the fit is the
+# capture's as rendered: M4, each albedo within 0.02 of its (sd 0.07).
+# About 3 s each.
+add_test(NAME cli_fit_rendered
+         COMMAND ${CHECK} --json-file ${UNUSABLE}/rendered/fit/fit.json
+                 --expect "doc['model']['code'] == 'M4'"
+                 -- ${CLAYFIT} --quiet fit ${UNUSABLE}/rendered/capture.json
+                    -o ${UNUSABLE}/rendered/fit)
+set_tests_properties(cli_fit_rendered PROPERTIES LABELS "cli;fit"
+                     FIXTURES_REQUIRED unusable_captures FIXTURES_SETUP rendered_fit)
+add_test(NAME cli_fit_bright_patch
+         COMMAND ${CHECK} --schema ${SCHEMA}/fit.schema.json
+                 --json-file ${UNUSABLE}/bright_patch/fit/fit.json
+                 --expect "doc['model']['code'] == 'M4'"
+                 --expect "[i['not_radiance'] for i in doc['residuals']['per_image']] == [100, 100, 100, 100]"
+                 --expect "any(w.startswith('400 pixels on the sphere hold values that cannot be radiance') for w in doc['warnings'])"
+                 --expect "max(abs(a - b) for a, b in zip(doc['params']['albedo']['value'], __import__('json').load(open('${UNUSABLE}/rendered/fit/fit.json'))['params']['albedo']['value'])) < 0.02"
+                 -- ${CLAYFIT} --quiet fit ${UNUSABLE}/bright_patch/capture.json
+                    -o ${UNUSABLE}/bright_patch/fit)
+set_tests_properties(cli_fit_bright_patch PROPERTIES LABELS "cli;fit"
+                     FIXTURES_REQUIRED "unusable_captures;rendered_fit")
+# inspect names each image, the bound and the highest value
+add_test(NAME cli_inspect_bright_patch
+         COMMAND ${CHECK} --schema ${SCHEMA}/inspect.schema.json
+                 --expect "[i['not_radiance'] for i in doc['images']] == [100, 100, 100, 100]"
+                 --expect "sum(': 100 of its 4344 pixels on the sphere' in w and '100 above the brightest radiance any material can reflect there' in w and 'highest 1e+06 where that is' in w for w in doc['warnings']) == 4"
+                 -- ${CLAYFIT} inspect --json ${UNUSABLE}/bright_patch/capture.json)
+set_tests_properties(cli_inspect_bright_patch PROPERTIES LABELS "cli;capture"
+                     FIXTURES_REQUIRED unusable_captures)
 # the report counts them per image, beside the censored ones
 add_test(NAME cli_report_negative_patch
          COMMAND ${CHECK} --schema ${SCHEMA}/report.schema.json
