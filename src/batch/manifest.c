@@ -21,6 +21,22 @@ int cf_batch_name_valid(const char *name) {
   return 1;
 }
 
+/* The names the library folder uses for itself, which an entry's folder
+ * would replace: library.json and index.html, and their temporaries while
+ * they are written (cf_write_file's "<name>.tmp-<pid>"). Its other own
+ * names (.lock, .lock.new.*, .tmp.*, .old.*, .slurm) start with '.', which
+ * no entry name does. Compared ignoring case, as names are. */
+static const char *reserved_name(const char *name) {
+  static const char *const own[] = {"library.json", "index.html"};
+  for (size_t i = 0; i < sizeof own / sizeof *own; ++i) {
+    size_t n = strlen(own[i]);
+    if (strncasecmp(name, own[i], n) == 0 &&
+        (name[n] == '\0' || strncasecmp(name + n, ".tmp-", 5) == 0))
+      return own[i];
+  }
+  return NULL;
+}
+
 /* "hold": {"param": number | [r, g, b]}. Names are checked against the
  * models later (cf_batch_fit_options), where the model is known. */
 static cf_status read_holds(const json_t *hold, const json_at *at, cf_batch_entry *e,
@@ -154,6 +170,14 @@ static cf_status read_entry(const json_t *record, const json_at *at, const char 
     return json_fail(&here, err, CF_EINVAL,
                      "'%s' is not a name: 1 to %d of A-Z a-z 0-9 . _ -, not starting with '.'",
                      name, CF_BATCH_NAME_MAX);
+  }
+  const char *own = s == CF_OK ? reserved_name(name) : NULL;
+  if (own) {
+    json_at here = json_member_at(at, "name");
+    return json_fail(&here, err, CF_EINVAL,
+                     "'%s' is a name the library folder uses for its own %s (library.json, "
+                     "index.html and their temporaries are reserved, ignoring case)",
+                     name, own);
   }
   if (s == CF_OK) strcpy(e->name, name);
   if (s == CF_OK) s = read_capture(record, at, dir, e, err);
