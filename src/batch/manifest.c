@@ -1,9 +1,11 @@
 /* The batch manifest (data_schema/manifest.schema.json), read as the
  * capture files are: every record checked, each error naming the file and
  * the JSON path. */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "clayfit/batch.h"
 #include "core/file.h"
@@ -141,7 +143,8 @@ static cf_status read_tags(const json_t *tags, const json_at *at, cf_error *err)
   return CF_OK;
 }
 
-/* The capture's path joined to the manifest's folder; the file must exist. */
+/* The capture's path joined to the manifest's folder; the file must exist
+ * and be a regular file (a symbolic link to one is). */
 static cf_status read_capture(const json_t *record, const json_at *at, const char *dir,
                               cf_batch_entry *e, cf_error *err) {
   const char *given = NULL;
@@ -151,8 +154,14 @@ static cf_status read_capture(const json_t *record, const json_at *at, const cha
   char path[4096];
   if (given[0] == '\0' || cf_path_join(dir, given, path, sizeof path, err) != CF_OK)
     return json_fail(&here, err, CF_EINVAL, "not a usable path");
-  if (!cf_path_exists(path))
-    return json_fail(&here, err, CF_ENOTFOUND, "%s: no such file", path);
+  struct stat st;
+  if (stat(path, &st) != 0)
+    return json_fail(&here, err, CF_ENOTFOUND, "%s: %s", path,
+                     errno == ENOENT ? "no such file" : strerror(errno));
+  if (!S_ISREG(st.st_mode)) /* a FIFO would block the batch, /dev/zero never end */
+    return json_fail(&here, err, CF_EINVAL,
+                     "%s: not a regular file (a folder, device or FIFO), as clayfit fit refuses",
+                     path);
   if (!(e->capture = strdup(path))) return cf_error_set(err, CF_ENOMEM, "out of memory");
   return CF_OK;
 }
