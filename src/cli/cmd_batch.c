@@ -43,7 +43,8 @@ static void batch_usage(FILE *out) {
           "  --dry-run         write and print the job script and the sbatch command,\n"
           "                    submit nothing\n"
           "  --task I          (internal) run entry I only, in this process: what each\n"
-          "                    worker runs; the caller holds the library's lock\n\n"
+          "                    worker runs; the caller holds the library's lock; exit 2\n"
+          "                    when the capture failed it, 1 for a failure while running\n\n"
           "exit status: 0 every entry fitted, 1 some failed (named on stderr) or the\n"
           "library is locked by another batch, 2 invalid command line or manifest\n");
 }
@@ -180,11 +181,12 @@ static int run_task(const batch_command *cmd, const cf_batch_manifest *m, const 
             m->count);
     return CLI_EXIT_USAGE;
   }
-  cf_status s = cf_batch_task_run(m, (size_t)cmd->task, cmd->library, &options, &err);
+  cf_batch_fault fault;
+  cf_status s = cf_batch_task_run(m, (size_t)cmd->task, cmd->library, &options, &fault, &err);
   if (s == CF_OK) return CLI_EXIT_OK;
-  if (!ctx->quiet) /* else it is in failed.json */
+  if (!ctx->quiet || fault != CF_BATCH_FAULT_INPUT) /* else it is in failed.json */
     fprintf(stderr, "clayfit batch: %s: %s\n", m->entries[cmd->task].name, err.message);
-  return CLI_EXIT_FAILURE;
+  return fault == CF_BATCH_FAULT_INPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
 }
 
 /* The entries to fit: missing, failed with another key or to be retried,
@@ -253,8 +255,9 @@ static size_t report_failures(const batch_command *cmd, const cf_batch_manifest 
     if (state == CF_BATCH_FITTED && ran_bad[i]) {
       failed++;
       fprintf(stderr,
-              "clayfit batch: failed: %s: its task died (killed, or crashed); the entry "
-              "is the earlier, stale one\n",
+              "clayfit batch: failed: %s: its task failed while running (its message above) "
+              "or died (killed, or crashed); the earlier entry is kept, and re-fitted by the "
+              "next run if its inputs changed\n",
               m->entries[i].name);
     }
     if (state == CF_BATCH_FITTED) continue;
