@@ -15,6 +15,7 @@
 #include "clayfit/batch.h"
 #include "cli.h"
 #include "core/file.h"
+#include "out_path.h"
 
 static void batch_usage(FILE *out) {
   fprintf(out,
@@ -46,7 +47,8 @@ static void batch_usage(FILE *out) {
           "                    worker runs; the caller holds the library's lock; exit 2\n"
           "                    when the capture failed it, 1 for a failure while running\n\n"
           "exit status: 0 every entry fitted, 1 some failed (named on stderr) or the\n"
-          "library is locked by another batch, 2 invalid command line or manifest\n");
+          "library is locked by another batch, 2 invalid command line (-o not a folder\n"
+          "that can be written) or manifest\n");
 }
 
 typedef struct batch_command {
@@ -158,6 +160,7 @@ static int parse_command(int argc, char **argv, batch_command *cmd) {
     s = cf_error_set(&err, CF_EINVAL, "expected one manifest (see clayfit batch --help)");
   if (s == CF_OK && !cmd->library) s = cf_error_set(&err, CF_EINVAL, "-o LIBRARY is required");
   if (s == CF_OK) s = check_executor(cmd, &err);
+  if (s == CF_OK && cmd->task < 0) s = cli_check_output("-o", cmd->library, CLI_OUT_FOLDER, &err);
   if (s != CF_OK) {
     cli_report("batch", err.message);
     return CLI_EXIT_USAGE;
