@@ -70,6 +70,30 @@ def states(library):
     return {e["name"]: e["state"] for e in doc["entries"]}
 
 
+def reading(pid, path):
+    """True when process pid has path open (the real path)."""
+    try:
+        fds = os.listdir(f"/proc/{pid}/fd")
+    except OSError:
+        return False
+    for fd in fds:
+        try:
+            if os.readlink(f"/proc/{pid}/fd/{fd}") == path:
+                return True
+        except OSError:
+            pass
+    return False
+
+
+def alive(pid):
+    """True while process pid runs (not gone, not a zombie)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, TypeError):
+        return False
+
+
 small = synth("small")
 other = synth("other", "96x72", "--seed", "2")
 MANIFEST = manifest(os.path.join(WORK, "manifest.json"), [("small", small), ("other", other)])
@@ -129,7 +153,8 @@ try:
           f"images linked to /dev/zero and a FIFO: those two fail, the rest fits ({failed})")
 except subprocess.TimeoutExpired:
     check(False, "images linked to /dev/zero and a FIFO: hung")
-# SIGINT while the captures are read (a large sparse image to hash): no lock left
+# SIGINT while the captures are read (a large sparse image to hash, sent once the
+# batch has it open): no lock left
 sparse = os.path.join(WORK, "sparse.exr")
 with open(sparse, "wb") as f:
     f.truncate(2 << 30)
@@ -141,7 +166,11 @@ os.symlink(sparse, first)
 m = manifest(os.path.join(WORK, "sparse.json"), [("sparse_image", big), ("small", small)])
 proc = subprocess.Popen([CLAYFIT, "batch", m, "-o", SPECIAL_LIBRARY, "--threads", "1"],
                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-time.sleep(0.3)
+
+deadline = time.monotonic() + HANG
+while (proc.poll() is None and not reading(proc.pid, os.path.realpath(sparse))
+       and time.monotonic() < deadline):
+    time.sleep(0.001)
 proc.send_signal(signal.SIGINT)
 try:
     out, err = proc.communicate(timeout=HANG)
@@ -159,16 +188,6 @@ KILLED = manifest(os.path.join(WORK, "killed.json"), [("small", small), ("mid", 
 KILLED_LIBRARY = os.path.join(WORK, "killed_library")
 r = batch(KILLED, KILLED_LIBRARY)
 check(r.returncode == 0, "killed: the library fitted first")
-
-
-def alive(pid):
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except (OSError, TypeError):
-        return False
-
-
 # (output to files: a pipe would be held open by a worker that survived)
 proc = subprocess.Popen([CLAYFIT, "batch", KILLED, "-o", KILLED_LIBRARY, "--threads", "1",
                          "--force"], stdout=open(os.path.join(WORK, "killed.out"), "w"),
