@@ -124,19 +124,34 @@ typedef struct cf_batch_task_options {
                                 (cf_report_options.viewer_bundle); NULL: none */
 } cf_batch_task_options;
 
+/* Whose fault a task's failure is. */
+typedef enum cf_batch_fault {
+  CF_BATCH_FAULT_NONE,  /* the task succeeded */
+  CF_BATCH_FAULT_INPUT, /* the capture's (what clayfit fit, export or report
+                           refuse with exit 2): failed.json replaces the entry */
+  CF_BATCH_FAULT_RUN    /* a failure while running (out of memory, disk full,
+                           I/O): an earlier fitted entry is kept, else
+                           failed.json with "retry": true */
+} cf_batch_fault;
+
 /* Run entry `index` in this process: load the capture, fit, write fit.json,
  * every preset and the report, and entry.json, into
  * LIBRARY/.tmp.<name>.<pid>, then replace LIBRARY/<name> with it. When a
- * step fails, LIBRARY/<name> becomes a folder holding failed.json (the
- * reason and the log) and the step's status is returned, err saying why.
- * CF_EIO when the library itself could not be written (no entry then). */
+ * step fails, the step's status is returned, err saying why, and *fault
+ * whose fault it is: the capture's makes LIBRARY/<name> a folder holding
+ * failed.json (the reason and the log); a failure while running keeps a
+ * fitted LIBRARY/<name> as it was (err says so), else leaves failed.json
+ * with "retry": true, which the next run fits again. CF_EIO (a failure
+ * while running) when the library itself could not be written (the entry
+ * is then as it was). */
 cf_status cf_batch_task_run(const cf_batch_manifest *manifest, size_t index, const char *library,
-                            const cf_batch_task_options *options, cf_error *err);
+                            const cf_batch_task_options *options, cf_batch_fault *fault,
+                            cf_error *err);
 
-/* 1 if LIBRARY/<name>/failed.json says its task died without a result
- * ("retry": true, written by the Slurm executor for a cancelled, timed-out
- * or killed task): the next run fits it again although its key is the
- * same. */
+/* 1 if LIBRARY/<name>/failed.json says its task ended without a result
+ * for a reason that is not the capture's ("retry": true: a failure while
+ * running, or a Slurm task cancelled, timed out or killed): the next run
+ * fits it again although its key is the same. */
 int cf_batch_failed_retry(const char *library, const char *name);
 
 /* ---- the executors ---- */

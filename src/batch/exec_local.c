@@ -1,35 +1,52 @@
 /* The local executor: a pool of worker processes, each running one task
  * as `clayfit batch MANIFEST -o LIBRARY --task I --threads T`, the same
  * command a Slurm array element runs. Processes, not threads: a task that
- * crashes or is killed takes nothing else with it. */
+ * crashes or is killed takes nothing else with it. Each worker dies with
+ * the batch (a parent-death signal). */
 #define _DEFAULT_SOURCE
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 #include <unistd.h>
 
 #include "batch_internal.h"
 
 extern char **environ;
 
-static cf_status spawn(const cf_batch_local_options *o, size_t index, pid_t *pid,
-                       cf_error *err) {
+/* In the child, before exec: the parent-death signal, so that a worker
+ * dies with its batch even when the batch is SIGKILLed (it cannot kill its
+ * workers then, and a re-run would take over the lock and delete the live
+ * worker's folder under it). The parent may have died before prctl: then
+ * the child's parent is no longer `parent`, and it ends at once. Only
+ * async-signal-safe calls: the child of fork. */
+static void child(const cf_batch_local_options *o, pid_t parent, char **argv) {
+#ifdef __linux__
+  if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);
+#endif
+  int null = open("/dev/null", O_WRONLY);
+  if (null < 0 || dup2(null, STDOUT_FILENO) < 0) _exit(127);
+  if (null != STDOUT_FILENO) close(null);
+  execve(o->exe, argv, environ);
+  _exit(127);
+}
+
+static cf_status spawn(const cf_batch_local_options *o, size_t index, pid_t *pid, cf_error *err) {
   char task[32], threads[32];
   snprintf(task, sizeof task, "%zu", index);
   snprintf(threads, sizeof threads, "%d", o->threads);
   char *argv[] = {"clayfit", "--quiet", "batch", (char *)o->manifest, "-o", (char *)o->library,
                   "--task", task, "--threads", threads, NULL};
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  int e = posix_spawn(pid, o->exe, &actions, NULL, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (e != 0) return cf_error_set(err, CF_EIO, "cannot start %s: %s", o->exe, strerror(e));
+  pid_t parent = getpid();
+  *pid = fork();
+  if (*pid < 0) return cf_error_set(err, CF_EIO, "cannot start %s: %s", o->exe, strerror(errno));
+  if (*pid == 0) child(o, parent, argv);
   return CF_OK;
 }
 

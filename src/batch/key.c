@@ -4,10 +4,14 @@
  * adversary forging one, which a library folder the user controls does
  * not need; it runs at memory speed (GB/s), so keying 16 large photos costs
  * little next to their fit. */
+#define _POSIX_C_SOURCE 200809L /* fdopen, O_CLOEXEC */
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <xxhash.h>
 
 #include "build_id.h"
@@ -28,11 +32,22 @@ static void hash_field(XXH3_state_t *h, const char *label, const void *data, siz
 
 /* A file's contents, in chunks (images are large); a file that cannot be
  * read is hashed as missing, so that the key exists and changes when the
- * file appears. Its role in the list (the index) is hashed, its path not:
- * a capture moved with its files keeps its key. */
+ * file appears. Only a regular file is read: a FIFO would block and
+ * /dev/zero never end, so anything else (opened without blocking, then
+ * looked at) is hashed as such, and the task refuses it as clayfit fit
+ * does. Its role in the list (the index) is hashed, its path not: a
+ * capture moved with its files keeps its key. */
 static cf_status hash_file(XXH3_state_t *h, const char *path, char *buffer, size_t size) {
-  FILE *f = fopen(path, "rb");
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  struct stat st;
+  if (fd >= 0 && (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))) {
+    close(fd);
+    hash_field(h, "not a regular file", "", 0);
+    return CF_OK;
+  }
+  FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
   if (!f) {
+    if (fd >= 0) close(fd);
     hash_field(h, "missing", "", 0);
     return CF_OK;
   }

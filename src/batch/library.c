@@ -187,7 +187,13 @@ static int lock_stale(const char *lock, char *holder, size_t size) {
   int stale = here && pid > 0 && process_start(pid) != start;
   /* our own (NFSv3 may answer a retried rename that succeeded with EEXIST) */
   if (here && pid == (long)getpid() && process_start(pid) == start) stale = -1;
-  snprintf(holder, size, "process %ld on host %s", pid, owner_host ? owner_host : "?");
+  if (pid > 0)
+    snprintf(holder, size, "process %ld on host %s", pid, owner_host ? owner_host : "?");
+  else /* not ours, and nothing to check whether its batch is gone */
+    snprintf(holder, size,
+             "a lock whose owner.json holds no process id (host %s): remove the lock by hand "
+             "once no batch uses the library",
+             owner_host ? owner_host : "not recorded either");
   json_decref(root);
   return stale;
 }

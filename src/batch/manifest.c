@@ -1,9 +1,11 @@
 /* The batch manifest (data_schema/manifest.schema.json), read as the
  * capture files are: every record checked, each error naming the file and
  * the JSON path. */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "clayfit/batch.h"
 #include "core/file.h"
@@ -19,6 +21,22 @@ int cf_batch_name_valid(const char *name) {
     if (!ok) return 0;
   }
   return 1;
+}
+
+/* The names the library folder uses for itself, which an entry's folder
+ * would replace: library.json and index.html, and their temporaries while
+ * they are written (cf_write_file's "<name>.tmp-<pid>"). Its other own
+ * names (.lock, .lock.new.*, .tmp.*, .old.*, .slurm) start with '.', which
+ * no entry name does. Compared ignoring case, as names are. */
+static const char *reserved_name(const char *name) {
+  static const char *const own[] = {"library.json", "index.html"};
+  for (size_t i = 0; i < sizeof own / sizeof *own; ++i) {
+    size_t n = strlen(own[i]);
+    if (strncasecmp(name, own[i], n) == 0 &&
+        (name[n] == '\0' || strncasecmp(name + n, ".tmp-", 5) == 0))
+      return own[i];
+  }
+  return NULL;
 }
 
 /* "hold": {"param": number | [r, g, b]}. Names are checked against the
@@ -125,7 +143,8 @@ static cf_status read_tags(const json_t *tags, const json_at *at, cf_error *err)
   return CF_OK;
 }
 
-/* The capture's path joined to the manifest's folder; the file must exist. */
+/* The capture's path joined to the manifest's folder; the file must exist
+ * and be a regular file (a symbolic link to one is). */
 static cf_status read_capture(const json_t *record, const json_at *at, const char *dir,
                               cf_batch_entry *e, cf_error *err) {
   const char *given = NULL;
@@ -135,8 +154,14 @@ static cf_status read_capture(const json_t *record, const json_at *at, const cha
   char path[4096];
   if (given[0] == '\0' || cf_path_join(dir, given, path, sizeof path, err) != CF_OK)
     return json_fail(&here, err, CF_EINVAL, "not a usable path");
-  if (!cf_path_exists(path))
-    return json_fail(&here, err, CF_ENOTFOUND, "%s: no such file", path);
+  struct stat st;
+  if (stat(path, &st) != 0)
+    return json_fail(&here, err, CF_ENOTFOUND, "%s: %s", path,
+                     errno == ENOENT ? "no such file" : strerror(errno));
+  if (!S_ISREG(st.st_mode)) /* a FIFO would block the batch, /dev/zero never end */
+    return json_fail(&here, err, CF_EINVAL,
+                     "%s: not a regular file (a folder, device or FIFO), as clayfit fit refuses",
+                     path);
   if (!(e->capture = strdup(path))) return cf_error_set(err, CF_ENOMEM, "out of memory");
   return CF_OK;
 }
@@ -154,6 +179,14 @@ static cf_status read_entry(const json_t *record, const json_at *at, const char 
     return json_fail(&here, err, CF_EINVAL,
                      "'%s' is not a name: 1 to %d of A-Z a-z 0-9 . _ -, not starting with '.'",
                      name, CF_BATCH_NAME_MAX);
+  }
+  const char *own = s == CF_OK ? reserved_name(name) : NULL;
+  if (own) {
+    json_at here = json_member_at(at, "name");
+    return json_fail(&here, err, CF_EINVAL,
+                     "'%s' is a name the library folder uses for its own %s (library.json, "
+                     "index.html and their temporaries are reserved, ignoring case)",
+                     name, own);
   }
   if (s == CF_OK) strcpy(e->name, name);
   if (s == CF_OK) s = read_capture(record, at, dir, e, err);

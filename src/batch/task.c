@@ -1,9 +1,9 @@
 /* One entry of a batch, in this process: the capture loaded, fitted,
  * fit.json, every preset, the report and thumbnail.png written into the
  * task's own folder, then entry.json (with each step's time), and the
- * folder renamed into place. A failure at
- * any step leaves failed.json (its reason and the task's log) as the
- * entry instead. */
+ * folder renamed into place. A failure the capture causes leaves
+ * failed.json (its reason and the task's log) as the entry instead; a
+ * failure while running (out of memory, disk full) keeps a fitted entry. */
 #define _DEFAULT_SOURCE /* gmtime_r, getrusage */
 #include <stdarg.h>
 #include <stdio.h>
@@ -169,12 +169,13 @@ static void timed(task *t, task_step step, double *mark) {
 }
 
 /* The fit, the presets, the report and the thumbnail, into the task's
- * folder. */
-static cf_status work(task *t, int threads, cf_error *err) {
+ * folder; *failed the step that failed. */
+static cf_status work(task *t, int threads, task_step *failed, cf_error *err) {
   cf_capture *capture = NULL;
   double mark = cf_now_seconds();
   cf_status s = load(t, &capture, err);
   timed(t, STEP_LOAD, &mark);
+  *failed = s == CF_OK ? STEP_FIT : STEP_LOAD;
   if (s == CF_OK) s = fit(t, capture, threads, err);
   char path[4096];
   cf_fit_file file;
@@ -182,16 +183,28 @@ static cf_status work(task *t, int threads, cf_error *err) {
   if (s == CF_OK) s = in_tmp(t, "fit.json", path, sizeof path, err);
   if (s == CF_OK) s = cf_fit_file_read(path, &file, err), read = s == CF_OK;
   timed(t, STEP_FIT, &mark);
-  if (s == CF_OK) s = presets(t, &file, err);
+  if (s == CF_OK) *failed = STEP_PRESETS, s = presets(t, &file, err);
   timed(t, STEP_PRESETS, &mark);
   if (s == CF_OK) task_log(t, "writing the report");
-  if (s == CF_OK) s = report(t, capture, &file, err);
+  if (s == CF_OK) *failed = STEP_REPORT, s = report(t, capture, &file, err);
   timed(t, STEP_REPORT, &mark);
-  if (s == CF_OK) s = thumbnail(t, &file, err);
+  if (s == CF_OK) *failed = STEP_THUMBNAIL, s = thumbnail(t, &file, err);
   timed(t, STEP_THUMBNAIL, &mark);
   if (read) cf_fit_file_free(&file);
   cf_capture_free(capture);
   return s;
+}
+
+/* 1 when a step's failure is the capture's, as the command that runs the
+ * step alone exits 2 for it (src/cli): clayfit fit loading (all but out of
+ * memory) and fitting (invalid or out of range), clayfit export (all but
+ * I/O and memory), clayfit report and its thumbnail (invalid). Else it is
+ * a failure while running: out of memory, disk full, an I/O error. */
+static int input_fault(task_step step, cf_status s) {
+  if (step == STEP_LOAD) return s != CF_ENOMEM;
+  if (step == STEP_FIT) return s == CF_EINVAL || s == CF_ERANGE;
+  if (step == STEP_PRESETS) return s != CF_EIO && s != CF_ENOMEM;
+  return s == CF_EINVAL; /* the report, the thumbnail */
 }
 
 static json_t *timing_of(const task *t) {
@@ -201,8 +214,10 @@ static json_t *timing_of(const task *t) {
   return timing;
 }
 
-/* entry.json, or failed.json (with the reason), into the task's folder. */
-static cf_status record(task *t, int threads, double cpu0, const char *reason, cf_error *err) {
+/* entry.json, or failed.json (with the reason, and "retry" when the
+ * failure is not the capture's), into the task's folder. */
+static cf_status record(task *t, int threads, double cpu0, const char *reason, int retry,
+                        cf_error *err) {
   char host[256], ended[32], path[4096];
   batch_host_name(host, sizeof host);
   utc_now(ended);
@@ -218,6 +233,7 @@ static cf_status record(task *t, int threads, double cpu0, const char *reason, c
   if (reason) {
     json_object_set_new(doc, "reason", json_text(reason));
     json_object_set(doc, "log", t->log);
+    if (retry) json_object_set_new(doc, "retry", json_true());
   } else {
     json_object_set_new(doc, "model", json_string(t->model));
   }
@@ -234,8 +250,20 @@ static cf_status fresh_tmp(const task *t, cf_error *err) {
   return cf_make_dirs(t->tmp, err);
 }
 
+/* A failure while running with a fitted entry in place: the entry kept
+ * whole, the task's folder removed, err saying so. */
+static cf_status keep_entry(task *t, cf_status status, cf_error *err) {
+  batch_remove_tree(t->tmp);
+  cf_error why = *err;
+  return cf_error_set(err, status,
+                      "%s (a failure while running, not the capture's: the earlier entry is kept)",
+                      why.message);
+}
+
 cf_status cf_batch_task_run(const cf_batch_manifest *m, size_t index, const char *library,
-                            const cf_batch_task_options *options, cf_error *err) {
+                            const cf_batch_task_options *options, cf_batch_fault *fault,
+                            cf_error *err) {
+  *fault = CF_BATCH_FAULT_RUN;
   if (index >= m->count)
     return cf_error_set(err, CF_ERANGE, "task %zu: the manifest has %zu captures", index, m->count);
   task t = {.entry = &m->entries[index],
@@ -253,17 +281,35 @@ cf_status cf_batch_task_run(const cf_batch_manifest *m, size_t index, const char
     json_decref(t.log);
     return s;
   }
-  cf_status status = work(&t, options->threads, err);
+  task_step step = STEP_LOAD;
+  cf_status status = work(&t, options->threads, &step, err);
+  int input = status != CF_OK && input_fault(step, status);
+  char have[CF_BATCH_KEY_SIZE];
+  if (status != CF_OK && !input &&
+      cf_batch_entry_state(library, t.entry->name, have) == CF_BATCH_FITTED) {
+    json_decref(t.log);
+    return keep_entry(&t, status, err);
+  }
   cf_error task_error = *err;
   if (status != CF_OK) {
     task_log(&t, "error: %s", err->message);
     s = fresh_tmp(&t, err);
   }
   if (s == CF_OK)
-    s = record(&t, options->threads, cpu0, status == CF_OK ? NULL : task_error.message, err);
+    s = record(&t, options->threads, cpu0, status == CF_OK ? NULL : task_error.message, !input,
+               err);
   if (s == CF_OK) s = batch_replace_entry(library, t.entry->name, t.tmp, err);
   if (s != CF_OK) batch_remove_tree(t.tmp);
   json_decref(t.log);
-  if (s == CF_OK && status != CF_OK) *err = task_error;
-  return s == CF_OK ? status : CF_EIO;
+  if (s != CF_OK && status != CF_OK) {
+    cf_error why = *err;
+    cf_error_set(err, CF_EIO, "%s; then the entry could not be recorded: %s", task_error.message,
+                 why.message);
+  }
+  if (s != CF_OK) return CF_EIO; /* the library not written: a failure while running */
+  *fault = status == CF_OK ? CF_BATCH_FAULT_NONE
+           : input         ? CF_BATCH_FAULT_INPUT
+                           : CF_BATCH_FAULT_RUN;
+  if (status != CF_OK) *err = task_error;
+  return status;
 }

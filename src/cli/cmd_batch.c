@@ -15,6 +15,7 @@
 #include "clayfit/batch.h"
 #include "cli.h"
 #include "core/file.h"
+#include "out_path.h"
 
 static void batch_usage(FILE *out) {
   fprintf(out,
@@ -43,9 +44,11 @@ static void batch_usage(FILE *out) {
           "  --dry-run         write and print the job script and the sbatch command,\n"
           "                    submit nothing\n"
           "  --task I          (internal) run entry I only, in this process: what each\n"
-          "                    worker runs; the caller holds the library's lock\n\n"
+          "                    worker runs; the caller holds the library's lock; exit 2\n"
+          "                    when the capture failed it, 1 for a failure while running\n\n"
           "exit status: 0 every entry fitted, 1 some failed (named on stderr) or the\n"
-          "library is locked by another batch, 2 invalid command line or manifest\n");
+          "library is locked by another batch, 2 invalid command line (-o not a folder\n"
+          "that can be written) or manifest\n");
 }
 
 typedef struct batch_command {
@@ -157,6 +160,7 @@ static int parse_command(int argc, char **argv, batch_command *cmd) {
     s = cf_error_set(&err, CF_EINVAL, "expected one manifest (see clayfit batch --help)");
   if (s == CF_OK && !cmd->library) s = cf_error_set(&err, CF_EINVAL, "-o LIBRARY is required");
   if (s == CF_OK) s = check_executor(cmd, &err);
+  if (s == CF_OK && cmd->task < 0) s = cli_check_output("-o", cmd->library, CLI_OUT_FOLDER, &err);
   if (s != CF_OK) {
     cli_report("batch", err.message);
     return CLI_EXIT_USAGE;
@@ -180,25 +184,26 @@ static int run_task(const batch_command *cmd, const cf_batch_manifest *m, const 
             m->count);
     return CLI_EXIT_USAGE;
   }
-  cf_status s = cf_batch_task_run(m, (size_t)cmd->task, cmd->library, &options, &err);
+  cf_batch_fault fault;
+  cf_status s = cf_batch_task_run(m, (size_t)cmd->task, cmd->library, &options, &fault, &err);
   if (s == CF_OK) return CLI_EXIT_OK;
-  if (!ctx->quiet) /* else it is in failed.json */
+  if (!ctx->quiet || fault != CF_BATCH_FAULT_INPUT) /* else it is in failed.json */
     fprintf(stderr, "clayfit batch: %s: %s\n", m->entries[cmd->task].name, err.message);
-  return CLI_EXIT_FAILURE;
+  return fault == CF_BATCH_FAULT_INPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
 }
 
-/* The entries to fit: missing, failed with another key, stale; all with
- * --force. */
-static size_t plan(const batch_command *cmd, const cf_batch_manifest *m, size_t *todo,
-                   size_t *up_to_date, cf_error *err) {
+/* The entries to fit: missing, failed with another key or to be retried,
+ * stale; all with --force. keys[i] is entry i's key. */
+static size_t plan(const batch_command *cmd, const cf_batch_manifest *m, const char *keys,
+                   size_t *todo, size_t *up_to_date) {
   size_t count = 0;
   *up_to_date = 0;
   for (size_t i = 0; i < m->count; ++i) {
-    char key[CF_BATCH_KEY_SIZE], have[CF_BATCH_KEY_SIZE];
-    if (cf_batch_entry_key(&m->entries[i], key, err) != CF_OK) return (size_t)-1;
+    char have[CF_BATCH_KEY_SIZE];
     cf_batch_state state = cf_batch_entry_state(cmd->library, m->entries[i].name, have);
     int retry = state == CF_BATCH_FAILED && cf_batch_failed_retry(cmd->library, m->entries[i].name);
-    if (!cmd->force && state != CF_BATCH_MISSING && !retry && strcmp(key, have) == 0)
+    if (!cmd->force && state != CF_BATCH_MISSING && !retry &&
+        strcmp(keys + i * CF_BATCH_KEY_SIZE, have) == 0)
       (*up_to_date)++;
     else
       todo[count++] = i;
@@ -253,8 +258,9 @@ static size_t report_failures(const batch_command *cmd, const cf_batch_manifest 
     if (state == CF_BATCH_FITTED && ran_bad[i]) {
       failed++;
       fprintf(stderr,
-              "clayfit batch: failed: %s: its task died (killed, or crashed); the entry "
-              "is the earlier, stale one\n",
+              "clayfit batch: failed: %s: its task failed while running (its message above) "
+              "or died (killed, or crashed); the earlier entry is kept, and re-fitted by the "
+              "next run if its inputs changed\n",
               m->entries[i].name);
     }
     if (state == CF_BATCH_FITTED) continue;
@@ -332,8 +338,30 @@ static void print_plan(const batch_command *cmd, size_t entries, size_t up_to_da
   fflush(stdout);
 }
 
+/* Every entry's key, m->count of CF_BATCH_KEY_SIZE bytes, before the lock
+ * is taken: reading the captures' files (a file that is not a regular one
+ * is not read: cf_batch_entry_key) is the slow part of planning, and
+ * SIGINT or SIGTERM while it runs must not leave the lock behind. NULL when
+ * interrupted or out of memory, err saying which. */
+static char *key_all(const cf_batch_manifest *m, cf_error *err) {
+  char *keys = calloc(m->count ? m->count : 1, CF_BATCH_KEY_SIZE);
+  if (!keys) return cf_error_set(err, CF_ENOMEM, "out of memory"), NULL;
+  for (size_t i = 0; i < m->count; ++i) {
+    if (interrupted) {
+      cf_error_set(err, CF_EIO, "interrupted while reading the captures, before any task");
+      free(keys);
+      return NULL;
+    }
+    if (cf_batch_entry_key(&m->entries[i], keys + i * CF_BATCH_KEY_SIZE, err) != CF_OK) {
+      free(keys);
+      return NULL;
+    }
+  }
+  return keys;
+}
+
 /* Under the lock: plan, run, library.json. */
-static int run_locked(const batch_command *cmd, const cf_batch_manifest *m,
+static int run_locked(const batch_command *cmd, const cf_batch_manifest *m, const char *keys,
                       const cli_context *ctx) {
   cf_error err = {0};
   int cleaned = cf_batch_clean(cmd->library);
@@ -342,10 +370,10 @@ static int run_locked(const batch_command *cmd, const cf_batch_manifest *m,
             cleaned == 1 ? "" : "s");
   size_t *todo = calloc(m->count, sizeof *todo);
   int *ok = calloc(m->count, sizeof *ok);
-  size_t up_to_date = 0, count = todo && ok ? plan(cmd, m, todo, &up_to_date, &err) : 0;
-  cf_status s = !todo || !ok          ? cf_error_set(&err, CF_ENOMEM, "out of memory")
-                : count == (size_t)-1 ? CF_EIO
-                                      : CF_OK;
+  size_t up_to_date = 0, count = todo && ok ? plan(cmd, m, keys, todo, &up_to_date) : 0;
+  cf_status s = !todo || !ok  ? cf_error_set(&err, CF_ENOMEM, "out of memory")
+                : interrupted ? cf_error_set(&err, CF_EIO, "interrupted before any task")
+                              : CF_OK;
   progress_context context = {m, todo, ctx->quiet};
   if (s == CF_OK) print_plan(cmd, m->count, up_to_date, count);
   if (s == CF_OK && cmd->dry_run) { /* nothing run, nothing written but the script */
@@ -360,7 +388,6 @@ static int run_locked(const batch_command *cmd, const cf_batch_manifest *m,
     cf_batch_local_options options = {"/proc/self/exe", cmd->manifest,     cmd->library,
                                       (int)cmd->jobs,   (int)cmd->threads, progress_line,
                                       &context,         &interrupted};
-    catch_signals();
     if (cmd->slurm)
       s = count ? run_slurm(cmd, m, todo, count, ok, &context, &err) : CF_OK;
     else
@@ -405,19 +432,23 @@ static int batch_main(batch_command *command, int argc, char **argv, cli_context
     cf_batch_manifest_free(&m);
     return exit_status;
   }
+  catch_signals(); /* from here on SIGINT and SIGTERM end the batch in order */
   int taken_over = 0;
-  s = cf_make_dirs(cmd.library, &err);
+  char *keys = key_all(&m, &err);
+  s = keys ? cf_make_dirs(cmd.library, &err) : CF_EIO;
   if (s == CF_OK) s = cf_batch_lock(cmd.library, &taken_over, &err);
   if (s != CF_OK) {
     cli_report("batch", err.message);
     cf_batch_manifest_free(&m);
+    free(keys);
     return CLI_EXIT_FAILURE;
   }
   if (taken_over && !ctx->quiet)
     fprintf(stderr, "clayfit batch: took over the stale lock of a batch that is gone\n");
-  exit_status = run_locked(&cmd, &m, ctx);
+  exit_status = run_locked(&cmd, &m, keys, ctx);
   cf_batch_unlock(cmd.library);
   cf_batch_manifest_free(&m);
+  free(keys);
   return exit_status;
 }
 

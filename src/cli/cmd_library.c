@@ -7,6 +7,7 @@
 
 #include "clayfit/library.h"
 #include "cli.h"
+#include "out_path.h"
 
 static void library_usage(FILE *out) {
   fprintf(out,
@@ -19,8 +20,8 @@ static void library_usage(FILE *out) {
           "  -o DIR   also write a.png, b.png, difference.png (a diverging scale, the\n"
           "           scale in compare.json and compare.html), a.exr, b.exr and\n"
           "           difference.exr (linear, A - B), compare.json and compare.html\n\n"
-          "exit status: 0 compared, 1 DIR could not be written, 2 invalid command line,\n"
-          "not a library, an unknown, failed or missing entry\n");
+          "exit status: 0 compared, 1 DIR could not be written, 2 invalid command line\n"
+          "(DIR not a writable folder), not a library, an unknown, failed or missing entry\n");
 }
 
 static const struct option library_options[] = {
@@ -77,6 +78,10 @@ static int compare(int argc, char **argv) {
   }
   cf_library_comparison comparison;
   cf_error err = {0};
+  if (dir && cli_check_output("-o", dir, CLI_OUT_FOLDER, &err) != CF_OK) {
+    cli_report("library compare", err.message);
+    return CLI_EXIT_USAGE;
+  }
   cf_status s = cf_library_compare(argv[optind], argv[optind + 1], argv[optind + 2], &comparison,
                                    &err);
   if (s != CF_OK) {

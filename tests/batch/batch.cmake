@@ -39,3 +39,19 @@ set_tests_properties(batch_slurm PROPERTIES LABELS "batch;slurm;slow" FIXTURES_R
                      RESOURCE_LOCK slurm_cluster
                      ENVIRONMENT SLURM_CONF=${CMAKE_BINARY_DIR}/slurm/slurm.conf
                      SKIP_RETURN_CODE 77 TIMEOUT 300)
+
+# batch_hostile: -o naming a file, a lock without a pid, captures and images
+# that are not regular files (never a hang), SIGINT while the captures are
+# read, the main process SIGKILLed (its worker dies with it), and failures
+# that are not the capture's (a file-size limit as a full disk; out of
+# memory under a limit of address space, not with the sanitizers, which
+# reserve terabytes of it) keeping the earlier entry whole.
+if(CLAYFIT_SANITIZE)
+  set(batch_memory_limit "")
+else()
+  set(batch_memory_limit --memory-limit)
+endif()
+add_test(NAME batch_hostile
+         COMMAND ${CLAYFIT_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/batch/check_batch_hostile.py
+                 ${CLAYFIT} ${CMAKE_CURRENT_BINARY_DIR}/batch_hostile ${batch_memory_limit})
+set_tests_properties(batch_hostile PROPERTIES LABELS "batch;cli;slow" TIMEOUT 600)

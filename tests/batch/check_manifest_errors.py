@@ -24,6 +24,12 @@ CASES = [
     ("a duplicate but for case", [good, {**good, "name": "A"}], "captures[1].name"),
     ("a missing capture", [{**good, "capture": "nowhere/capture.json"}],
      "captures[0].capture: "),
+    ("the library's own library.json", [good, {**good, "name": "library.json"}],
+     "captures[1].name: 'library.json' is a name the library folder uses"),
+    ("the library's own index.html, in capitals", [{**good, "name": "INDEX.html"}],
+     "captures[0].name: 'INDEX.html' is a name the library folder uses"),
+    ("library.json's temporary", [{**good, "name": "Library.Json.tmp-42"}],
+     "captures[0].name: 'Library.Json.tmp-42' is a name the library folder uses"),
     ("a number for a name", [{**good, "name": 3}], "captures[0].name: expected a string"),
     ("a string for a bool", [{**good, "options": {"fit_exposures": "yes"}}],
      "captures[0].options.fit_exposures"),
@@ -47,6 +53,7 @@ for what, captures, message in CASES:
     manifest = os.path.join(WORK, "manifest.json")
     json.dump({"clayfit_manifest": 1, "captures": captures}, open(manifest, "w"))
     library = os.path.join(WORK, "library")
+    shutil.rmtree(library, ignore_errors=True)  # one case failing does not fail the next
     r = subprocess.run([CLAYFIT, "batch", manifest, "-o", library], capture_output=True, text=True)
     ok = r.returncode == 2 and f"manifest.json: {message}" in r.stderr and not os.path.exists(library)
     print(("ok   " if ok else "FAIL ") + f"{what}: exit {r.returncode}: {r.stderr.strip()}")
