@@ -4,19 +4,16 @@
  * adversary forging one, which a library folder the user controls does
  * not need; it runs at memory speed (GB/s), so keying 16 large photos costs
  * little next to their fit. */
-#define _POSIX_C_SOURCE 200809L /* fdopen, O_CLOEXEC */
 #include <errno.h>
-#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <xxhash.h>
 
 #include "build_id.h"
 #include "clayfit/batch.h"
 #include "clayfit/capture.h"
+#include "core/file.h"
 #include "core/json_reader.h"
 
 const char *cf_batch_build_id(void) { return CLAYFIT_BUILD_ID; }
@@ -38,17 +35,12 @@ static void hash_field(XXH3_state_t *h, const char *label, const void *data, siz
  * does. Its role in the list (the index) is hashed, its path not: a
  * capture moved with its files keeps its key. */
 static cf_status hash_file(XXH3_state_t *h, const char *path, char *buffer, size_t size) {
-  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  struct stat st;
-  if (fd >= 0 && (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))) {
-    close(fd);
-    hash_field(h, "not a regular file", "", 0);
-    return CF_OK;
-  }
-  FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
-  if (!f) {
-    if (fd >= 0) close(fd);
-    hash_field(h, "missing", "", 0);
+  FILE *f;
+  long long file_size;
+  cf_error err;
+  cf_status opened = cf_open_regular_file(path, &f, &file_size, &err);
+  if (opened != CF_OK) {
+    hash_field(h, opened == CF_ENOTFOUND ? "missing" : "not readable", "", 0);
     return CF_OK;
   }
   hash_field(h, "file", "", 0);
