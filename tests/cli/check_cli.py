@@ -13,7 +13,7 @@ usage: check_cli.py [--exit N] [--stderr REGEX] [--stdout REGEX]
 --cwd      the folder the command runs in (default: the current one)
 --schema   stdout must be JSON valid against this JSON Schema (2020-12)
 --json-file  the JSON to check is this file (written by the command), not stdout
---expect   a Python expression over `doc` (stdout's JSON), with math and os, that
+--expect   a Python expression over `doc` (stdout's JSON), with json, math and os, that
            must be true
 --skip-unless PATH  exit 77 (skipped) when PATH does not exist (third-party data)
 """
@@ -77,7 +77,7 @@ def main() -> int:
             failures.append(f"schema: {'/'.join(map(str, error.path))}: {error.message}")
     if doc is not None:
         for expression in args.expect:
-            if not eval(expression, {"doc": doc, "math": math, "os": os}):  # noqa: S307
+            if not eval(expression, {"doc": doc, "json": json, "math": math, "os": os}):  # noqa: S307
                 failures.append(f"expectation failed: {expression}")
     print("$", " ".join(command))
     print("exit", result.returncode)

@@ -104,7 +104,7 @@ add_test(NAME cli_fit_bright_patch
                  --expect "doc['model']['code'] == 'M4'"
                  --expect "[i['not_radiance'] for i in doc['residuals']['per_image']] == [100, 100, 100, 100]"
                  --expect "any(w.startswith('400 pixels on the sphere hold values that cannot be radiance') for w in doc['warnings'])"
-                 --expect "max(abs(a - b) for a, b in zip(doc['params']['albedo']['value'], __import__('json').load(open('${UNUSABLE}/rendered/fit/fit.json'))['params']['albedo']['value'])) < 0.02"
+                 --expect "max(abs(a - b) for a, b in zip(doc['params']['albedo']['value'], json.load(open('${UNUSABLE}/rendered/fit/fit.json'))['params']['albedo']['value'])) < 0.02"
                  -- ${CLAYFIT} --quiet fit ${UNUSABLE}/bright_patch/capture.json
                     -o ${UNUSABLE}/bright_patch/fit)
 set_tests_properties(cli_fit_bright_patch PROPERTIES LABELS "cli;fit"
