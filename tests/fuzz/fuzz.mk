@@ -29,13 +29,14 @@ IMAGE := src/capture/image_io.c src/capture/image_codec.c src/capture/image_png.
          src/capture/image_pfm.c src/capture/image_jpeg.c src/capture/image_exif.c \
          src/capture/image_exr.cpp src/capture/image_exr_check.c src/capture/image_check.c \
          src/capture/colour.c src/capture/envmap.c src/capture/jpeg_coding.c
-CAPTURE_FILES := src/capture/capture_spec.c src/capture/capture_lights.c src/capture/lights.c
+CAPTURE_SPEC := src/capture/capture_spec.c src/capture/capture_spec_lights.c
+CAPTURE_FILES := $(CAPTURE_SPEC) src/capture/capture_lights.c src/capture/lights.c
 FIT_READ := src/fit/fit_read.c src/fit/fit_read_sections.c src/fit/fit_read_choice.c \
             src/fit/fit_result.c src/fit/fit_response.c
 
 # target: its harness, then the sources it reads with
 fuzz_colmap_binary := tests/fuzz/fuzz_colmap_binary.c $(COLMAP) $(CORE)
-fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c src/capture/capture_spec.c $(IMAGE) $(CORE)
+fuzz_capture_spec := tests/fuzz/fuzz_capture_spec.c $(CAPTURE_SPEC) $(IMAGE) $(CORE)
 fuzz_text := tests/fuzz/fuzz_text.c tests/fuzz/fuzz_stubs.c $(CAPTURE_FILES) $(IMAGE) $(CORE)
 fuzz_fit_file := tests/fuzz/fuzz_fit_file.c $(FIT_READ) $(MODEL) $(GRID) $(CORE)
 fuzz_image := tests/fuzz/fuzz_image.cpp $(IMAGE) $(CORE)
