@@ -21,6 +21,8 @@
 
 #include "capture/image_codec.h"
 #include "capture/image_exr_check.h"
+#include "codec_support.h"
+#include "core/file.h"
 #include "exr_fixtures.h"
 #include "support/check.h"
 
@@ -28,32 +30,25 @@ CHECK_MAIN_STATE;
 
 static char folder[256];
 
-static const char *temp_path(const char *name) {
-  static char paths[8][320];
-  static int next = 0;
-  char *out = paths[next++ % 8];
-  snprintf(out, sizeof paths[0], "%s/%s", folder, name);
-  return out;
-}
-
 static void clear_header(cf_image_header *header) {
   memset(header, 0, sizeof *header);
-  header->info.exposure_time = header->info.f_number = header->info.iso = NAN;
+  codec_info_clear(&header->info);
 }
 
 /* The lead's dispatcher, for OpenEXR: the file's size, the header walk
  * (image_exr_check.c), then the reader. check = 0 skips the walk. */
 static cf_status exr_read(const char *path, int check, int width, int height,
                           cf_image_header *header, cf_image *image, cf_error *err) {
-  struct stat st;
   clear_header(header);
   if (image) memset(image, 0, sizeof *image);
-  FILE *file = stat(path, &st) == 0 ? fopen(path, "rb") : NULL;
-  if (!file) return cf_error_set(err, CF_EIO, "%s: cannot open it", path);
-  cf_status s = check ? cf_exr_check_headers(path, file, (long long)st.st_size, err) : CF_OK;
+  FILE *file;
+  long long size;
+  cf_status s = cf_open_regular_file(path, &file, &size, err);
+  if (s != CF_OK) return s;
+  s = check ? cf_exr_check_headers(path, file, size, err) : CF_OK;
   if (s == CF_OK) {
     rewind(file);
-    s = image_exr_read(path, file, (long long)st.st_size, width, height, header, image, err);
+    s = image_exr_read(path, file, size, width, height, header, image, err);
   }
   fclose(file);
   return s;
@@ -136,7 +131,7 @@ static void compare_file(const char *path, const char *label) {
 }
 
 static void fixture(const char *name, exr_fixture f) {
-  const char *path = temp_path(name);
+  const char *path = codec_path(folder, name);
   char why[256];
   if (exr_fixture_write(path, &f, why, sizeof why) != 0) {
     CHECK(0, "%s: %s", name, why);
@@ -246,7 +241,7 @@ static void test_oiio_files(void) {
       }
       char name[32];
       snprintf(name, sizeof name, "oiio_%d_%d.exr", bits, channels);
-      const char *path = temp_path(name);
+      const char *path = codec_path(folder, name);
       CHECK(image_oiio_write(path, &image, bits, &info, 0, CF_CHROMA_444, &err) == CF_OK, "%s",
             err.message);
       compare_file(path, name);
@@ -348,7 +343,8 @@ static void test_writer(void) {
       cf_image_alloc(&image, 17, 9, channels, &err);
       fill_special(&image, 7u * (unsigned)(bits + channels));
       const cf_image_info *info = &infos[channels % 2];
-      const char *theirs = temp_path("by_oiio.exr"), *ours = temp_path("by_exr.exr");
+      const char *theirs = codec_path(folder, "by_oiio.exr"),
+                 *ours = codec_path(folder, "by_exr.exr");
       CHECK(image_oiio_write(theirs, &image, bits, info, 0, CF_CHROMA_444, &err) == CF_OK, "%s",
             err.message);
       CHECK(image_exr_write(ours, &image, bits, info, &err) == CF_OK, "%s", err.message);
@@ -393,7 +389,7 @@ static void test_write_time(void) {
     image.pixels[k] = 0.5f + 0.4f * sinf(0.001f * (float)k);
   enum { ROUNDS = 11 };
   double ours[ROUNDS], theirs[ROUNDS];
-  const char *path = temp_path("timed.exr");
+  const char *path = codec_path(folder, "timed.exr");
   for (int r = 0; r < ROUNDS; ++r) {
     double start = now();
     CHECK(image_exr_write(path, &image, 16, NULL, &err) == CF_OK, "%s", err.message);
@@ -475,7 +471,7 @@ static void test_errors(void) {
   fill_special(&image, 3u);
   for (size_t k = 0; k < (size_t)64 * 64 * 3; ++k) /* finite values, well compressed */
     image.pixels[k] = (float)(k % 97) / 8.0f;
-  const char *good = temp_path("good.exr"), *bad = temp_path("bad.exr");
+  const char *good = codec_path(folder, "good.exr"), *bad = codec_path(folder, "bad.exr");
   CHECK(image_exr_write(good, &image, 16, NULL, &err) == CF_OK, "%s", err.message);
   cf_image_free(&image);
   unsigned char *bytes = NULL;

@@ -20,19 +20,12 @@
 #include <jpeglib.h>
 
 #include "capture/image_codec.h"
+#include "codec_support.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
 
 static char folder[256];
-
-static const char *path_of(const char *name) {
-  static char paths[8][320];
-  static int next = 0;
-  char *out = paths[next++ % 8];
-  snprintf(out, sizeof paths[0], "%s/%s", folder, name);
-  return out;
-}
 
 static double now(void) {
   struct timespec t;
@@ -60,11 +53,6 @@ static cf_image picture(int width, int height, int channels, unsigned seed) {
   return image;
 }
 
-static void info_clear(cf_image_info *info) {
-  memset(info, 0, sizeof *info);
-  info->exposure_time = info->f_number = info->iso = NAN;
-}
-
 static int same_double(double a, double b) {
   return (isnan(a) && isnan(b)) || memcmp(&a, &b, sizeof a) == 0;
 }
@@ -85,25 +73,9 @@ static int same_pixels(const cf_image *a, const cf_image *b) {
                 sizeof(float) * (size_t)a->width * (size_t)a->height * (size_t)a->channels) == 0;
 }
 
-/* image_jpeg_read as the dispatcher calls it. */
-static cf_status ours_read(const char *path, int width, int height, cf_image_header *header,
-                           cf_image *image, cf_error *err) {
-  struct stat st;
-  FILE *file = fopen(path, "rb");
-  if (!file || stat(path, &st) != 0) {
-    if (file) fclose(file);
-    return cf_error_set(err, CF_EIO, "%s: cannot open", path);
-  }
-  info_clear(&header->info);
-  cf_status s =
-      image_jpeg_read(path, file, (long long)st.st_size, width, height, header, image, err);
-  fclose(file);
-  return s;
-}
-
 static cf_status oiio_read(const char *path, int width, int height, cf_image_header *header,
                            cf_image *image, cf_error *err) {
-  info_clear(&header->info);
+  codec_info_clear(&header->info);
   return image_oiio_read(path, width, height, header, image, err);
 }
 
@@ -112,7 +84,8 @@ static int read_both_equal(const char *path, const char *label) {
   cf_image_header ha, hb;
   cf_image a = {0}, b = {0};
   cf_error ea = {0}, eb = {0};
-  cf_status sa = oiio_read(path, 0, 0, &ha, &a, &ea), sb = ours_read(path, 0, 0, &hb, &b, &eb);
+  cf_status sa = oiio_read(path, 0, 0, &ha, &a, &ea),
+            sb = codec_read(image_jpeg_read, path, 0, 0, &hb, &b, &eb);
   int equal = sa == CF_OK && sb == CF_OK && same_header(&ha, &hb) && same_pixels(&a, &b);
   CHECK(equal,
         "%s: OpenImageIO %d (%s), ours %d (%s): header %d (%.9g s f/%.9g ISO %g vs %.9g s "
@@ -183,7 +156,7 @@ static void test_decoding(void) {
         for (size_t k = 0; k < 3; ++k) {
           if (channels == 1 && k > 0) continue; /* greyscale has no chroma */
           cf_image image = picture(sizes[s][0], sizes[s][1], channels, (unsigned)(q * 7 + k));
-          const char *path = path_of("decode.jpg");
+          const char *path = codec_path(folder, "decode.jpg");
           cf_error err = {0};
           CHECK(image_oiio_write(path, &image, 8, NULL, kQualities[q], kChromas[k], &err) == CF_OK,
                 "%s", err.message);
@@ -205,7 +178,7 @@ static void test_decoding(void) {
                {"YCCK", {.in = JCS_CMYK, .stored = JCS_YCCK}, 4},
                {"progressive YCCK", {.in = JCS_CMYK, .stored = JCS_YCCK, .progressive = 1}, 4}};
   for (size_t i = 0; i < sizeof kinds / sizeof *kinds; ++i) {
-    const char *path = path_of("libjpeg.jpg");
+    const char *path = codec_path(folder, "libjpeg.jpg");
     libjpeg_write(path, &image, kinds[i].components, &kinds[i].how);
     printf("decoding, libjpeg's %s file: %s\n", kinds[i].name,
            read_both_equal(path, kinds[i].name) ? "identical" : "DIFFERENT");
@@ -218,7 +191,7 @@ static void test_decoding(void) {
 /* image written by both writers, each file read by OpenImageIO (and ours
  * read by ours): 1 when all the pixels agree. */
 static int write_both_equal(const cf_image *image, int quality, cf_chroma chroma) {
-  const char *theirs = path_of("oiio.jpg"), *ours = path_of("ours.jpg");
+  const char *theirs = codec_path(folder, "oiio.jpg"), *ours = codec_path(folder, "ours.jpg");
   cf_error err = {0};
   cf_status s = image_oiio_write(theirs, image, 8, NULL, quality, chroma, &err);
   if (s == CF_OK) s = image_jpeg_write(ours, image, quality, chroma, NULL, &err);
@@ -227,7 +200,7 @@ static int write_both_equal(const cf_image *image, int quality, cf_chroma chroma
   cf_image a = {0}, b = {0}, c = {0};
   s = oiio_read(theirs, 0, 0, &h, &a, &err);
   if (s == CF_OK) s = oiio_read(ours, 0, 0, &h, &b, &err);
-  if (s == CF_OK) s = ours_read(ours, 0, 0, &h, &c, &err);
+  if (s == CF_OK) s = codec_read(image_jpeg_read, ours, 0, 0, &h, &c, &err);
   int equal = s == CF_OK && same_pixels(&a, &b) && same_pixels(&b, &c);
   CHECK(equal, "encoding %dx%dx%d q%d %s: %s", image->width, image->height, image->channels,
         quality, chroma_name(chroma), s == CF_OK ? "pixels differ" : err.message);
@@ -283,7 +256,7 @@ static void test_exif_values(void) {
   for (int as_float = 0; as_float < 2; ++as_float)
     for (size_t i = 0; i < sizeof times / sizeof *times; ++i) {
       cf_image_info in, out;
-      info_clear(&in), info_clear(&out);
+      codec_info_clear(&in), codec_info_clear(&out);
       in.exposure_time = as_float ? (float)times[i] : times[i];
       in.f_number = as_float ? (float)fs[i % 6] : fs[i % 6];
       in.iso = isos[i % 6];
@@ -297,7 +270,7 @@ static void test_exif_values(void) {
       ++checked;
     }
   cf_image_info none;
-  info_clear(&none);
+  codec_info_clear(&none);
   unsigned char block[256];
   CHECK(image_exif_write(&none, block, sizeof block) == 0, "no values, no block");
   printf("EXIF values written and read back as OpenImageIO's floats: %d settings\n", checked);
@@ -312,10 +285,11 @@ static void test_exif_files(void) {
   printf("EXIF in a JPEG: written by ours / by OpenImageIO, read by OpenImageIO (s, f, ISO)\n");
   for (size_t i = 0; i < 6; ++i) {
     cf_image_info info;
-    info_clear(&info);
+    codec_info_clear(&info);
     info.exposure_time = settings[i][0], info.f_number = settings[i][1];
     info.iso = settings[i][2];
-    const char *ours = path_of("exif_ours.jpg"), *theirs = path_of("exif_oiio.jpg");
+    const char *ours = codec_path(folder, "exif_ours.jpg"),
+               *theirs = codec_path(folder, "exif_oiio.jpg");
     cf_error err = {0};
     cf_status s = image_jpeg_write(ours, &image, 90, CF_CHROMA_420, &info, &err);
     if (s == CF_OK) s = image_oiio_write(theirs, &image, 8, &info, 90, CF_CHROMA_420, &err);
@@ -394,7 +368,7 @@ static void test_exif_malformed(void) {
       }
       unsigned char app1[6 + sizeof t.b];
       memcpy(app1, "Exif\0\0", 6), memcpy(app1 + 6, t.b, sizeof t.b);
-      const char *path = path_of("exif_block.jpg");
+      const char *path = codec_path(folder, "exif_block.jpg");
       libjpeg_write(path, &image, 3, &(libjpeg_file){.app1 = app1, .app1_size = sizeof app1});
       char label[64];
       snprintf(label, sizeof label, "EXIF block %d (%s)", variant, big ? "MM" : "II");
@@ -416,7 +390,7 @@ static void test_exif_malformed(void) {
     if (variant == 5) put(&t, 8, 1, 2), entry(&t, 10, 0x8769, 4, 1, 159); /* SubIFD at the end */
     if (variant == 6) size = 7; /* shorter than a header */
     cf_image_info info;
-    info_clear(&info);
+    codec_info_clear(&info);
     image_exif_read(t.b, size, &info);
     hostile += isnan(info.exposure_time) && isnan(info.f_number) && isnan(info.iso);
   }
@@ -457,7 +431,8 @@ static void refused(const char *path, const char *what, cf_status want) {
   cf_image_header h;
   cf_image a = {0}, b = {0};
   cf_error ea = {0}, eb = {0};
-  cf_status sa = oiio_read(path, 0, 0, &h, &a, &ea), sb = ours_read(path, 0, 0, &h, &b, &eb);
+  cf_status sa = oiio_read(path, 0, 0, &h, &a, &ea),
+            sb = codec_read(image_jpeg_read, path, 0, 0, &h, &b, &eb);
   CHECK(sb == want && strstr(eb.message, path) && !b.pixels, "%s: ours gave %d (%s)", what, sb,
         eb.message);
   printf("  %-34s OpenImageIO: %s; ours: %s\n", what, sa == CF_OK ? "read it" : "refused",
@@ -468,7 +443,7 @@ static void refused(const char *path, const char *what, cf_status want) {
 
 static void test_hostile(void) {
   cf_image image = picture(64, 48, 3, 9);
-  const char *good = path_of("good.jpg"), *bad = path_of("bad.jpg");
+  const char *good = codec_path(folder, "good.jpg"), *bad = codec_path(folder, "bad.jpg");
   cf_error err = {0};
   CHECK(image_jpeg_write(good, &image, 90, CF_CHROMA_420, NULL, &err) == CF_OK, "%s", err.message);
   size_t size;
@@ -498,9 +473,10 @@ static void test_hostile(void) {
   printf("  (refused in %.1f ms)\n", 1e3 * (now() - t0));
   cf_image_header h;
   cf_image out = {0};
-  CHECK(ours_read(good, 63, 48, &h, &out, &err) == CF_EINVAL && !out.pixels,
+  CHECK(codec_read(image_jpeg_read, good, 63, 48, &h, &out, &err) == CF_EINVAL && !out.pixels,
         "another size expected: %s", err.message);
-  CHECK(ours_read(good, 64, 48, &h, &out, &err) == CF_OK && out.pixels, "%s", err.message);
+  CHECK(codec_read(image_jpeg_read, good, 64, 48, &h, &out, &err) == CF_OK && out.pixels, "%s",
+        err.message);
   cf_image_free(&out);
   free(bytes), free(copy);
   cf_image_free(&image);
@@ -518,7 +494,7 @@ static void test_scans(void) {
     for (int ah = 0; ah <= 10; ++ah)
       scans[n++] = (jpeg_scan_info){1, {0}, k, k, ah == 0 ? 0 : 11 - ah, 10 - ah};
   cf_image image = picture(1024, 768, 1, 3);
-  const char *path = path_of("scans.jpg");
+  const char *path = codec_path(folder, "scans.jpg");
   libjpeg_write(path, &image, 1, &(libjpeg_file){.scans = scans, .scan_count = n});
   double t0 = now();
   struct jpeg_decompress_struct c;
@@ -540,7 +516,7 @@ static void test_scans(void) {
   cf_image_header h;
   cf_image out = {0};
   cf_error err = {0};
-  cf_status s = ours_read(path, 0, 0, &h, &out, &err);
+  cf_status s = codec_read(image_jpeg_read, path, 0, 0, &h, &out, &err);
   printf(
       "a 1024 x 768 file of %d scans: plain libjpeg decodes it in %.0f ms; ours: %s in %.0f "
       "ms\n",
@@ -571,7 +547,8 @@ static cf_image speed_picture(const char *data) {
 
 static void test_speed(const char *data) {
   cf_image image = speed_picture(data);
-  const char *path = path_of("speed.jpg"), *theirs = path_of("speed_oiio.jpg");
+  const char *path = codec_path(folder, "speed.jpg"),
+             *theirs = codec_path(folder, "speed_oiio.jpg");
   enum { RUNS = 10 };
   double t[6] = {0};
   cf_error err;
@@ -585,7 +562,7 @@ static void test_speed(const char *data) {
     cf_image a = {0}, b = {0}, c = {0}, d = {0};
     oiio_read(path, 0, 0, &h, &a, &err);
     double t3 = now();
-    ours_read(path, 0, 0, &h, &b, &err);
+    codec_read(image_jpeg_read, path, 0, 0, &h, &b, &err);
     double t4 = now();
     image_oiio_jpeg_roundtrip(&image, 90, CF_CHROMA_420, &c, &err);
     double t5 = now();

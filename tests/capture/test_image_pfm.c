@@ -13,41 +13,21 @@
 #include <unistd.h>
 
 #include "capture/image_codec.h"
+#include "codec_support.h"
 #include "support/check.h"
 
 CHECK_MAIN_STATE;
 
 static char folder[256];
 
-static void info_clear(cf_image_info *info) {
-  memset(info, 0, sizeof *info);
-  info->exposure_time = info->f_number = info->iso = NAN;
-}
-
-static cf_status pfm_read(const char *path, int width, int height, cf_image_header *header,
-                          cf_image *image, cf_error *err) {
-  memset(header, 0, sizeof *header);
-  info_clear(&header->info);
-  struct stat st;
-  FILE *file = fopen(path, "rb");
-  if (!file || stat(path, &st) != 0) {
-    if (file) fclose(file);
-    return cf_error_set(err, CF_EIO, "%s: cannot open", path);
-  }
-  cf_status s =
-      image_pfm_read(path, file, (long long)st.st_size, width, height, header, image, err);
-  fclose(file);
-  return s;
-}
-
 /* Both readers: equal header and pixels. */
 static void compare_readers(const char *path, const char *label) {
   cf_image_header a, b;
   cf_image ia = {0}, ib = {0};
   cf_error ea = {0}, eb = {0};
-  cf_status sa = pfm_read(path, 0, 0, &a, &ia, &ea);
+  cf_status sa = codec_read(image_pfm_read, path, 0, 0, &a, &ia, &ea);
   memset(&b, 0, sizeof b);
-  info_clear(&b.info);
+  codec_info_clear(&b.info);
   cf_status sb = image_oiio_read(path, 0, 0, &b, &ib, &eb);
   CHECK(sa == CF_OK && sb == CF_OK, "%s: pfm %d (%s), oiio %d (%s)", label, sa, ea.message, sb,
         eb.message);
@@ -114,7 +94,7 @@ static void made_cases(void) {
   CHECK(image_pfm_write(path, &image, &err) == CF_OK, "%s", err.message);
   compare_readers(path, "image_pfm_write, 3 channels");
   cf_image_header header;
-  CHECK(pfm_read(path, 9, 4, &header, &back, &err) == CF_OK && back.pixels &&
+  CHECK(codec_read(image_pfm_read, path, 9, 4, &header, &back, &err) == CF_OK && back.pixels &&
             memcmp(back.pixels, image.pixels, sizeof(float) * 9 * 4 * 3) == 0,
         "image_pfm_write: read back other values");
   cf_image_free(&back);
@@ -135,7 +115,7 @@ static void refused(const char *header, int width, int height, int channels, siz
   cf_image_header h;
   cf_image image = {0};
   cf_error err = {0};
-  cf_status s = pfm_read(path, 0, 0, &h, &image, &err);
+  cf_status s = codec_read(image_pfm_read, path, 0, 0, &h, &image, &err);
   CHECK(s == want, "%s: status %s, not %s (%s)", label, cf_status_name(s), cf_status_name(want),
         err.message);
   CHECK(image.pixels == NULL && strstr(err.message, path), "%s: %s", label, err.message);
@@ -161,8 +141,8 @@ static void error_cases(void) {
   cf_image_header h;
   cf_image image = {0};
   cf_error err = {0};
-  CHECK(pfm_read(path, 5, 7, &h, &image, &err) == CF_EINVAL && !image.pixels, "5 x 7 expected: %s",
-        err.message);
+  CHECK(codec_read(image_pfm_read, path, 5, 7, &h, &image, &err) == CF_EINVAL && !image.pixels,
+        "5 x 7 expected: %s", err.message);
   printf("  %-36s %-8s %s\n", "5 x 7 expected", "EINVAL", err.message);
 }
 

@@ -20,6 +20,7 @@
 #include <zlib.h>
 
 #include "capture/image_codec.h"
+#include "codec_support.h"
 #include "support/check.h"
 #include "test_image_png_make.h"
 
@@ -60,32 +61,10 @@ static double now(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static void info_clear(cf_image_info *info) {
-  memset(info, 0, sizeof *info);
-  info->exposure_time = info->f_number = info->iso = NAN;
-}
-
-/* image_png_read as the dispatcher calls it. */
-static cf_status png_read(const char *path, int width, int height, cf_image_header *header,
-                          cf_image *image, cf_error *err) {
-  memset(header, 0, sizeof *header);
-  info_clear(&header->info);
-  struct stat st;
-  FILE *file = fopen(path, "rb");
-  if (!file || stat(path, &st) != 0) {
-    if (file) fclose(file);
-    return cf_error_set(err, CF_EIO, "%s: cannot open", path);
-  }
-  cf_status s =
-      image_png_read(path, file, (long long)st.st_size, width, height, header, image, err);
-  fclose(file);
-  return s;
-}
-
 static cf_status oiio_read(const char *path, cf_image_header *header, cf_image *image,
                            cf_error *err) {
   memset(header, 0, sizeof *header);
-  info_clear(&header->info);
+  codec_info_clear(&header->info);
   return image_oiio_read(path, 0, 0, header, image, err);
 }
 
@@ -98,7 +77,7 @@ static int compare_readers(const char *path, const char *label) {
   cf_image_header a, b;
   cf_image ia = {0}, ib = {0};
   cf_error ea = {0}, eb = {0};
-  cf_status sa = png_read(path, 0, 0, &a, &ia, &ea);
+  cf_status sa = codec_read(image_png_read, path, 0, 0, &a, &ia, &ea);
   cf_status sb = oiio_read(path, &b, &ib, &eb);
   CHECK(sa == CF_OK && sb == CF_OK, "%s: png %d (%s), oiio %d (%s)", label, sa, ea.message, sb,
         eb.message);
@@ -206,7 +185,7 @@ static void offset_case(void) {
   cf_image_header h1, h2;
   cf_image ia = {0}, ib = {0};
   cf_error err = {0};
-  CHECK(png_read(a, 0, 0, &h1, &ia, &err) == CF_OK, "oFFs 5 7: %s", err.message);
+  CHECK(codec_read(image_png_read, a, 0, 0, &h1, &ia, &err) == CF_OK, "oFFs 5 7: %s", err.message);
   CHECK(oiio_read(b, &h2, &ib, &err) == CF_OK, "%s", err.message);
   int equal =
       ia.pixels && ib.pixels && memcmp(ia.pixels, ib.pixels, sizeof(float) * 29 * 17 * 3) == 0;
@@ -251,8 +230,8 @@ static void writer_cases(void) {
       compare_readers(ours, label);
       cf_image_header h1, h2;
       cf_image a = {0}, b = {0};
-      CHECK(png_read(ours, 0, 0, &h1, &a, &err) == CF_OK &&
-                png_read(theirs, 0, 0, &h2, &b, &err) == CF_OK,
+      CHECK(codec_read(image_png_read, ours, 0, 0, &h1, &a, &err) == CF_OK &&
+                codec_read(image_png_read, theirs, 0, 0, &h2, &b, &err) == CF_OK,
             "%s", err.message);
       CHECK(a.pixels && b.pixels &&
                 memcmp(a.pixels, b.pixels, sizeof(float) * 37 * 23 * (size_t)channels) == 0,
@@ -376,7 +355,7 @@ static cf_status read_damaged(const char *source, damage edit, const char *label
   cf_image image = {0};
   cf_error err = {0};
   quiet_begin();
-  cf_status s = png_read(path, 0, 0, &header, &image, &err);
+  cf_status s = codec_read(image_png_read, path, 0, 0, &header, &image, &err);
   long printed = quiet_end();
   CHECK(printed == 0, "%s: %ld bytes printed on stderr", label, printed);
   CHECK(s == CF_OK || strstr(err.message, path) != NULL, "%s: error without the file: %s", label,
@@ -434,10 +413,12 @@ static void error_cases(void) {
   cf_image_header header;
   cf_image image = {0};
   cf_error err = {0};
-  CHECK(png_read(source, 10, 10, &header, &image, &err) == CF_EINVAL && !image.pixels,
+  CHECK(codec_read(image_png_read, source, 10, 10, &header, &image, &err) == CF_EINVAL &&
+            !image.pixels,
         "the wrong size expected: %s", err.message);
   printf("  %-34s %-8s %s\n", "10 x 10 expected", "EINVAL", err.message);
-  CHECK(png_read(source, 61, 40, &header, NULL, &err) == CF_OK && header.width == 61,
+  CHECK(codec_read(image_png_read, source, 61, 40, &header, NULL, &err) == CF_OK &&
+            header.width == 61,
         "the header alone: %s", err.message);
   cf_image_alloc(&image, 61, 40, 3, &err);
   quiet_begin();
@@ -468,7 +449,7 @@ static void hostile_text_chunks(void) {
   cf_image a = {0}, b = {0};
   cf_error err = {0};
   quiet_begin();
-  cf_status s = png_read(bombed, 0, 0, &h1, &a, &err);
+  cf_status s = codec_read(image_png_read, bombed, 0, 0, &h1, &a, &err);
   long printed = quiet_end();
   t = now() - t;
   long grown = peak_kib() - before;
@@ -476,7 +457,7 @@ static void hostile_text_chunks(void) {
   CHECK(printed == 0, "text bombs: %ld bytes on stderr", printed);
   CHECK(grown < 100 * 1024 || !PEAK_MEANINGFUL, "text bombs: the peak memory grew by %ld KiB",
         grown);
-  CHECK(png_read(plain, 0, 0, &h2, &b, &err) == CF_OK && a.pixels &&
+  CHECK(codec_read(image_png_read, plain, 0, 0, &h2, &b, &err) == CF_OK && a.pixels &&
             memcmp(a.pixels, b.pixels, sizeof(float) * 29 * 17 * 3) == 0,
         "text bombs: other pixels");
   printf("100 zTXt chunks of 4 MB inflated: read in %.2f s, peak memory +%ld KiB\n", t, grown);
@@ -497,7 +478,7 @@ static void speed(const char *data) {
     cf_image image = {0};
     cf_error err = {0};
     double t = now();
-    if (png_read(path, 0, 0, &header, &image, &err) != CF_OK) continue;
+    if (codec_read(image_png_read, path, 0, 0, &header, &image, &err) != CF_OK) continue;
     ours += now() - t;
     cf_image_free(&image);
     t = now();
@@ -544,7 +525,7 @@ int main(int argc, char **argv) {
     return 1;
   }
   cf_image_info probe;
-  info_clear(&probe);
+  codec_info_clear(&probe);
   unsigned char block[84];
   image_exif_read(block, exif_block_make(block, 125), &probe);
   exif_available = !isnan(probe.exposure_time);
