@@ -79,6 +79,8 @@ typedef struct cf_capture_image {
                            nearest its tables, 0 when its markers could not be read */
   int jpeg_exact;       /* 1: its tables are that quality's exactly */
   int jpeg_chroma;      /* its chroma subsampling, a cf_chroma */
+  double adjacent_turn; /* the largest angle (radians) between the normals of
+                           two horizontally adjacent observations */
 } cf_capture_image;
 
 /* Progress of a long load, for a progress line: stage is a short phrase

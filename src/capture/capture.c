@@ -96,6 +96,7 @@ static cf_status load(cf_capture *capture, const char *path, const cf_capture_op
   }
   if ((s = check_sphere_seen(capture, err)) != CF_OK) return s;
   if ((s = capture_screen_observations(capture, err)) != CF_OK) return s;
+  capture_measure_adjacent_turn(capture);
   /* the observations' irradiance in absolute units from the reference */
   return capture->spec.has_reference ? capture_apply_reference(capture, err) : CF_OK;
 }

@@ -136,6 +136,8 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
  * per image, a warning beyond a trace), then refuse a capture with no lit,
  * positive observation or mostly such values (CF_EINVAL, saying why). */
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
+/* Every image's adjacent_turn from the final observations (capture_turn.c). */
+void capture_measure_adjacent_turn(cf_capture *capture);
 
 /* capture_images.c: every map's, image's and mask's header read before
  * any of them is decoded: sizes against the cameras, masks and normal map

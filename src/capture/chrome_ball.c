@@ -59,12 +59,6 @@ static void reflect(const double v[3], const double n[3], double out[3]) {
   for (int k = 0; k < 3; ++k) out[k] = v[k] - 2.0 * vn * n[k];
 }
 
-/* The angle between two unit vectors, radians (stable near 0). */
-static double angle_between(const double a[3], const double b[3]) {
-  double c[3];
-  cf_cross3(a, b, c);
-  return atan2(sqrt(cf_dot3(c, c)), cf_dot3(a, b));
-}
 
 /* ---- the ball as seen ---- */
 
@@ -159,7 +153,7 @@ static int ball_direction(const ball *b, double x, double y, double l[3], double
   for (int k = 0; k < 3; ++k) n[k] = (t * u[k] - b->axis[k]) / b->sin_half;
   if (!cf_normalize3(n)) return 0;
   reflect(u, n, l);
-  if (rho) *rho = b->half > 0.0 ? angle_between(u, b->axis) / b->half : 0.0;
+  if (rho) *rho = b->half > 0.0 ? cf_angle3(u, b->axis) / b->half : 0.0;
   return 1;
 }
 
@@ -419,7 +413,7 @@ static cf_status blobs_to_lights(blob *blobs, size_t count, const cf_ellipse *ou
       if (cf_camera_unproject(b->camera, uv, view) && cf_normalize3(view))
         for (int c = 0; c < 3; ++c) view[c] = -view[c];
     }
-    L->view_angle_deg = CF_DEGREES * angle_between(L->direction, view);
+    L->view_angle_deg = CF_DEGREES * cf_angle3(L->direction, view);
     sensitivities(outline, b, L);
     if ((1.0 - B->rho_max) * r_px < RIM_PX || L->rho > RIM_RHO) L->warnings |= CF_CHROME_GRAZING;
     if ((double)B->area > EXTENDED_FRACTION * (double)result->ball_pixels)

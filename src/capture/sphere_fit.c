@@ -252,10 +252,9 @@ static cf_status closed_form_start(const cf_silhouette_view *views, size_t num_v
     for (int k = 0; k < 3; ++k) axis[k] /= len;
     double angle_sum = 0.0;
     for (size_t i = 0; i < view->count; ++i) {
-      double d[3], c[3];
+      double d[3];
       oriented_ray(view, i, d);
-      cf_cross3(axis, d, c);
-      angle_sum += atan2(cf_norm3(c), cf_dot3(axis, d));
+      angle_sum += cf_angle3(axis, d);
     }
     double w[3] = {x[0] - view->origin[0], x[1] - view->origin[1], x[2] - view->origin[2]};
     radius_sum += cf_norm3(w) * sin(angle_sum / (double)view->count);

@@ -56,6 +56,24 @@ static void check_geometry(const cf_capture *capture) {
   }
   CHECK(worst_unit < 1e-12, "normals and views are unit vectors (worst %.3g)", worst_unit);
   CHECK(facing == obs->count, "%zu of %zu observations face the camera", facing, obs->count);
+  /* each image's adjacent_turn: the largest angle between the normals of
+   * horizontally adjacent pixels, here by acos */
+  size_t images = cf_capture_image_count(capture);
+  double largest[4] = {0.0, 0.0, 0.0, 0.0};
+  for (size_t i = 0; i + 1 < obs->count && images <= 4; ++i) {
+    if (obs->image[i] != obs->image[i + 1] || obs->pixel[2 * i + 1] != obs->pixel[2 * i + 3] ||
+        obs->pixel[2 * i + 2] != obs->pixel[2 * i] + 1.0f)
+      continue;
+    const double *a = obs->normal + 3 * i, *b = a + 3;
+    double turn = acos(fmin(1.0, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]));
+    largest[obs->image[i]] = fmax(largest[obs->image[i]], turn);
+  }
+  for (size_t k = 0; k < images && images <= 4; ++k) {
+    double turn = cf_capture_image_at(capture, k)->adjacent_turn;
+    CHECK(largest[k] > 0.0 && fabs(turn - largest[k]) < 1e-6 * largest[k],
+          "image %zu: adjacent_turn %.9g, the largest turn between adjacent normals %.9g", k, turn,
+          largest[k]);
+  }
 }
 
 static int run(const char *dir, int supersample, comparison *result) {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/parallel.h"
+#include "core/vec.h"
 #include "problem.h"
 
 /* The observations split into this many parts per thread (the integrated
@@ -18,32 +19,17 @@ static int parts_for(const fit_problem *p) {
   return threads > 1 && p->rows.count >= 1024 ? threads * PARTS_PER_THREAD : 1;
 }
 
-static double angle_between(const double a[3], const double b[3]) {
-  double cross[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]};
-  double sine = sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-  return atan2(sine, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
-}
-
 /* Per image, an upper bound on how far the normal turns across one pixel:
- * 1.5 × the largest turn between horizontally adjacent observations (the
- * capture lists an image's pixels row by row), for choosing which
- * observations can need samples before measuring each. */
+ * 1.5 × the largest turn between horizontally adjacent observations
+ * (cf_capture_image's adjacent_turn), for choosing which observations can
+ * need samples before measuring each. */
 static cf_status turn_bounds(const cf_capture *capture, double **bound, cf_error *err) {
-  const cf_observations *obs = cf_capture_observations(capture);
   size_t images = cf_capture_image_count(capture);
   *bound = calloc(images ? images : 1, sizeof **bound);
   if (!*bound) return cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t k = 0; k + 1 < obs->count; ++k) {
-    if (obs->image[k] != obs->image[k + 1] || obs->pixel[2 * k + 1] != obs->pixel[2 * k + 3] ||
-        obs->pixel[2 * k + 2] - obs->pixel[2 * k] != 1.0f)
-      continue;
-    double turn = angle_between(obs->normal + 3 * k, obs->normal + 3 * (k + 1));
-    double *b = &(*bound)[obs->image[k]];
-    if (turn > *b) *b = turn;
-  }
   /* 1.5: a margin for turns not seen (99730e9; 1: DiLiGenT moves 0.01 sd; 3: no fit moves) */
-  for (size_t k = 0; k < images; ++k) (*bound)[k] *= 1.5;
+  for (size_t k = 0; k < images; ++k)
+    (*bound)[k] = 1.5 * cf_capture_image_at(capture, k)->adjacent_turn;
   return CF_OK;
 }
 
@@ -57,7 +43,7 @@ static double pixel_turn(const cf_capture *capture, size_t k, double fallback, d
     if (!cf_capture_footprint_at(capture, k, edge[e][0], edge[e][1], n[e], view, scratch,
                                  scratch + 3 * (size_t)lights))
       return fallback;
-  return fmax(angle_between(n[0], n[1]), angle_between(n[2], n[3]));
+  return fmax(cf_angle3(n[0], n[1]), cf_angle3(n[2], n[3]));
 }
 
 /* Observations [begin, end) of choose_samples' adaptive S. */

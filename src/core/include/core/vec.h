@@ -28,6 +28,14 @@ static inline double cf_norm3(const double a[3]) {
   return sqrt(cf_dot3(a, a));
 }
 
+/* The angle between a and b in radians, [0, π] (exact near 0 and π, where
+ * acos of the normalised dot product is not). */
+static inline double cf_angle3(const double a[3], const double b[3]) {
+  double c[3];
+  cf_cross3(a, b, c);
+  return atan2(cf_norm3(c), cf_dot3(a, b));
+}
+
 /* v scaled to length 1; 0 (v unchanged) when its length is 0 or not
  * finite. */
 static inline int cf_normalize3(double v[3]) {
