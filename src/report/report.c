@@ -243,11 +243,9 @@ static cf_status write_parts(const cf_capture *capture, const cf_fit_file *fit, 
   d.capture_check = options && options->capture_check ? options->capture_check : "";
   char(*files)[3][64] = calloc(d.images ? d.images : 1, sizeof *files);
   if (!files) s = cf_error_set(err, CF_ENOMEM, "out of memory");
-  for (size_t k = 0; s == CF_OK && k < d.images; ++k) {
-    progress(options, "writing images", k, d.images);
-    s = report_image(&d, k, dir, files[k], err);
-  }
-  if (s == CF_OK) progress(options, "writing images", d.images, d.images);
+  if (s == CF_OK)
+    s = report_images(&d, dir, files, options ? options->progress : NULL,
+                      options ? options->progress_user : NULL, err);
   report_view view;
   if (s == CF_OK) progress(options, "writing the material's view", 0, 1);
   if (s == CF_OK) s = report_view_scene(&d, &view, err);

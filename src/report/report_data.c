@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel.h"
 #include "core/vec.h"
 #include "report_internal.h"
 
@@ -88,20 +89,19 @@ static cf_status allocate(report_data *d, cf_error *err) {
   return CF_OK;
 }
 
-/* Each observation's combined residual in sigma, its marks and angles;
- * each image's range of observations, counts and RMS. */
-static cf_status residuals(report_data *d, cf_error *err) {
-  size_t k = d->images ? d->images : 1;
+/* Observations [begin, end)'s combined residual in σ, marks and angles. */
+typedef struct observation_job {
+  report_data *d;
+  int parts;
+} observation_job;
+
+static void observation_part(void *user, int part) {
+  const observation_job *job = user;
+  report_data *d = job->d;
   const cf_observations *o = d->obs;
-  for (size_t im = 0; im < d->images; ++im) d->first[im] = d->count;
-  for (size_t i = 0; i < d->count; ++i) {
-    uint32_t im = o->image[i];
-    if (d->first[im] == d->count) d->first[im] = i;
-    d->last[im] = i + 1;
-  }
-  double *sum2 = calloc(k, sizeof *sum2);
-  if (!sum2) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", k);
-  for (size_t i = 0; i < d->count; ++i) {
+  size_t begin, end;
+  cf_part_range(d->count, job->parts, part, &begin, &end);
+  for (size_t i = begin; i < end; ++i) {
     double total = 0.0;
     int used = 0;
     for (int c = 0; c < 3; ++c) {
@@ -120,10 +120,33 @@ static cf_status residuals(report_data *d, cf_error *err) {
     d->view_angle[i] =
         (float)(acos(fmax(-1.0, fmin(1.0, cf_dot3(o->normal + 3 * i, o->view + 3 * i)))) *
                 CF_DEGREES);
+  }
+}
+
+/* Each observation's combined residual in sigma, its marks and angles (in
+ * parts, on the threads); each image's range of observations, counts and
+ * RMS (in the observations' order). */
+static cf_status residuals(report_data *d, cf_error *err) {
+  size_t k = d->images ? d->images : 1;
+  const cf_observations *o = d->obs;
+  for (size_t im = 0; im < d->images; ++im) d->first[im] = d->count;
+  for (size_t i = 0; i < d->count; ++i) {
+    uint32_t im = o->image[i];
+    if (d->first[im] == d->count) d->first[im] = i;
+    d->last[im] = i + 1;
+  }
+  double *sum2 = calloc(k, sizeof *sum2);
+  if (!sum2) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", k);
+  observation_job job = {d, d->threads};
+  cf_parallel_for(job.parts, d->threads, observation_part, &job);
+  for (size_t i = 0; i < d->count; ++i) {
     uint32_t im = o->image[i];
     ++d->observations[im];
     d->censored[im] += (d->mark[i] & REPORT_CENSORED) != 0;
     d->rejected[im] += (d->mark[i] & REPORT_REJECTED) != 0;
+    int used = 0; /* the channels not censored */
+    for (int c = 0; c < 3; ++c)
+      used += !((o->flags[i] >> c & 1u) && d->prediction[3 * i + c] >= o->rgb[3 * i + c]);
     if (used) sum2[im] += (double)d->residual[i] * d->residual[i];
   }
   for (size_t im = 0; im < d->images; ++im)
@@ -224,6 +247,8 @@ cf_status report_data_build(report_data *d, const cf_capture *capture, const cf_
   cf_fit_default_options(&options, fit->result.model);
   options.footprint = fit->footprint;
   options.footprint_tolerance = fit->footprint_tolerance;
+  d->threads = options.threads > 1 ? options.threads : 1;
+  report_srgb_init(&d->srgb);
   s = cf_fit_predict(capture, &fit->result, &options, d->prediction, d->sigma, err);
   if (s != CF_OK) {
     report_data_free(d);

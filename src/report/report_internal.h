@@ -18,6 +18,17 @@
 
 enum { REPORT_CENSORED = 1u << 0, REPORT_REJECTED = 1u << 1 };
 
+/* The 8-bit sRGB code of a linear value (report_images.c): the code the
+ * PNG writer stores for cf_linear_to_srgb of the value clamped to [0, 1],
+ * read from the encoding's steps instead of computed. */
+enum { REPORT_SRGB_BINS = 4096 };
+typedef struct report_srgb {
+  float threshold[256];                /* the least value of each code */
+  uint8_t start[REPORT_SRGB_BINS + 1]; /* the code of b / REPORT_SRGB_BINS */
+} report_srgb;
+void report_srgb_init(report_srgb *t);
+int report_srgb_encode(const report_srgb *t, float linear);
+
 typedef struct report_data {
   const cf_capture *capture;
   const cf_fit_file *fit;
@@ -41,6 +52,8 @@ typedef struct report_data {
   size_t *rejected_clustered; /* those in its regions of REPORT_CLUSTER_PX or more */
   const char *capture_path;   /* the capture re-rendered */
   const char *capture_check;  /* how it was checked to be the fit's (cf_report_options) */
+  report_srgb srgb;           /* the pictures' encoding */
+  int threads;                /* the pictures' and the prediction's */
   const json_t *doc;          /* fit.json as cf_fit_file_read parsed it (the fit's; for the
                                  choice, solver, timings); may be NULL */
 } report_data;
@@ -68,6 +81,12 @@ void report_data_free(report_data *d);
  * names receives the three file names relative to DIR (64 bytes each). */
 cf_status report_image(const report_data *d, size_t k, const char *dir, char names[3][64],
                        cf_error *err);
+/* Every image's pictures (report_image), on d->threads; names: 3 per
+ * image. progress (may be NULL) is called as each image is done, one call
+ * at a time, from any of the threads. On failure, the first failing
+ * image's error. */
+cf_status report_images(const report_data *d, const char *dir, char (*names)[3][64],
+                        cf_progress_fn progress, void *user, cf_error *err);
 
 /* The heat map's colour of a residual r (σ units): blue at
  * −CF_REPORT_SIGMA_RANGE, white at 0, red at +CF_REPORT_SIGMA_RANGE

@@ -97,6 +97,13 @@ foreach(case oversized capture folders)
   endif()
 endforeach()
 
+# Issue 31: the pictures' 8-bit sRGB codes read from the encoding's steps,
+# the same as cf_linear_to_srgb's through the PNG writer.
+clayfit_c_test(test_report_srgb SOURCES report/test_report_srgb.c
+               LIBS clayfit_report clayfit_core LABELS report
+               ARGS ${CMAKE_CURRENT_BINARY_DIR}/report_srgb)
+target_include_directories(test_report_srgb PRIVATE ${PROJECT_SOURCE_DIR}/src/report)
+
 # Issue 20, the material library's gallery: the thumbnail (the fitted sphere
 # under the standard light: the analytic Lambert value, the background, the
 # PNG, every model finite, albedo order; its time printed) and the gallery

@@ -42,8 +42,9 @@ static char out[1024];
 typedef struct hook {
   int kill_at;  /* raise SIGKILL at this progress call (1-based); 0: never */
   int calls;
-  int full_at;  /* before image full_at is written, point its photo's temporary at /dev/full;
-                   -1: never */
+  int full_at;  /* before any image is written (at "predicting": the images are written
+                   side by side, in no fixed order), point image full_at's photo's
+                   temporary at /dev/full; -1: never */
   char dir[1100];
 } hook;
 
@@ -51,7 +52,7 @@ static void on_progress(void *user, const char *stage, size_t done, size_t total
   hook *h = user;
   (void)total;
   if (++h->calls == h->kill_at) raise(SIGKILL);
-  if (h->full_at >= 0 && strcmp(stage, "writing images") == 0 && done == (size_t)h->full_at) {
+  if (h->full_at >= 0 && strcmp(stage, "predicting") == 0 && done == 0) {
     char link[1400];
     /* the image's own temporary (cf_image_write: PATH.tmp-PID.EXT) */
     snprintf(link, sizeof link, "%s.tmp-%ld/images/%03d_photo.png.tmp-%ld.png", h->dir,
