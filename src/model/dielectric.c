@@ -79,7 +79,7 @@ static void dielectric_value_grad(const cf_prepared *prep, const cf_geometry *g,
 }
 
 const cf_model_impl cf_dielectric_impl = {dielectric_prepare, dielectric_value,
-                                          dielectric_value_grad, NULL};
+                                          dielectric_value_grad, cf_dielectric_batch};
 
 /* M2T: M2's vector plus the tail (model.h). */
 static void dielectric_tailed_prepare(const double *params, cf_prepared *prep) {

@@ -96,6 +96,12 @@ void cf_dielectric_prepare(const double *params, cf_dielectric_prep *p);
 void cf_dielectric_eval(const cf_dielectric_prep *p, const cf_geometry *g, double f[3],
                         double *grad, int dim);
 
+/* M2's batch (cf_model_impl.batch): four observations at once in the
+ * lanes of a vector where the processor can (dielectric_block.c); 0 where
+ * it declines. */
+int cf_dielectric_batch(const cf_prepared *prep, size_t count, const cf_geometry *geometry,
+                        double *f, double *grad);
+
 /* M4 taken apart (docs/model.md (30)), for tests and reports:
  *   f_c = top + transmission · absorption_c · inv_eta2 · base_c. */
 typedef struct cf_clay_terms {
