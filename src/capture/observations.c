@@ -4,41 +4,135 @@
  * view, every light's direction and irradiance, RGB, flags. Then the
  * screen of the whole capture: values that cannot be radiance left out,
  * and a capture with nothing lit and positive to fit refused. */
+#define _DEFAULT_SOURCE /* madvise */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "capture_internal.h"
 #include "core/order_statistics.h"
+#include "core/parallel.h"
+#include "image_codec.h"
 #include "core/vec.h"
 
-/* Make room for `extra` more observations (doubling). */
-static cf_status reserve(cf_capture *capture, size_t extra, cf_error *err) {
-  cf_observations *o = &capture->obs;
-  if (o->count + extra <= capture->obs_capacity) return CF_OK;
-  size_t capacity = capture->obs_capacity ? capture->obs_capacity : 4096;
-  while (capacity < o->count + extra) capacity *= 2;
-  size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
-#define GROW(field, per)                                                                   \
-  do {                                                                                     \
-    void *grown = realloc(o->field, capacity * (per) * sizeof *o->field);                  \
-    if (!grown)                                                                            \
-      return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", capacity); \
-    o->field = grown;                                                                      \
-  } while (0)
-  GROW(normal, 3);
-  GROW(view, 3);
-  GROW(light_dir, 3 * slots);
-  GROW(irradiance, 3 * slots);
-  GROW(rgb, 3);
-  GROW(flags, 1);
-  GROW(image, 1);
-  GROW(pixel, 2);
-#undef GROW
-  capture->obs_capacity = capacity;
+/* The arrays of n observations (o->lights set) as they are: `field`,
+ * its values per observation. */
+#define EACH_ARRAY(o, slots, DO) \
+  DO(normal, 3);                 \
+  DO(view, 3);                   \
+  DO(light_dir, 3 * (slots));    \
+  DO(irradiance, 3 * (slots));   \
+  DO(rgb, 3);                    \
+  DO(flags, 1);                  \
+  DO(image, 1);                  \
+  DO(pixel, 2)
+
+static size_t slots_of(const cf_observations *o) {
+  return (size_t)(o->lights > 0 ? o->lights : 1);
+}
+
+/* Huge pages for a large array: first touching its pages (zeroing them)
+ * is most of the kernel's part of loading, 4 KiB at a time otherwise. */
+static void advise_huge(void *p, size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  const uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), huge = (uintptr_t)2 << 20;
+  uintptr_t begin = ((uintptr_t)p + page - 1) / page * page, end = (uintptr_t)p + bytes;
+  if (end > begin + huge) madvise((void *)begin, (end - begin) / page * page, MADV_HUGEPAGE);
+#else
+  (void)p, (void)bytes;
+#endif
+}
+
+cf_status capture_allocate_observations(cf_observations *o, size_t n, cf_error *err) {
+  const size_t slots = slots_of(o), room = n ? n : 1;
+#define ALLOCATE(field, per)                                                   \
+  if (!(o->field = malloc(room * (per) * sizeof *o->field)))                   \
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", n); \
+  advise_huge(o->field, room * (per) * sizeof *o->field)
+  EACH_ARRAY(o, slots, ALLOCATE);
+#undef ALLOCATE
   return CF_OK;
+}
+
+void capture_shrink_observations(cf_observations *o) {
+  const size_t slots = slots_of(o), room = o->count ? o->count : 1;
+  void *shrunk;
+#define SHRINK(field, per)                                         \
+  if ((shrunk = realloc(o->field, room * (per) * sizeof *o->field))) \
+  o->field = shrunk /* (on failure the larger block stays) */
+  EACH_ARRAY(o, slots, SHRINK);
+#undef SHRINK
+}
+
+void capture_free_observations(cf_observations *o) {
+  const size_t slots = slots_of(o);
+#define FREE(field, per) \
+  free(o->field);        \
+  o->field = NULL
+  EACH_ARRAY(o, slots, FREE);
+#undef FREE
+  (void)slots;
+}
+
+void capture_move_observations(cf_observations *to, size_t at, const cf_observations *from,
+                               size_t first, size_t count) {
+  if ((to == from && at == first) || count == 0) return;
+  const size_t slots = slots_of(to);
+#define MOVE(field, per) \
+  memmove(to->field + (per) * at, from->field + (per) * first, (per) * count * sizeof *to->field)
+  EACH_ARRAY(to, slots, MOVE);
+#undef MOVE
+}
+
+/* An 8-bit image's 256 values (image_scale_u8's) decoded once each by
+ * cf_decode_pixel: a look-up instead of a pow per channel, bit-identical;
+ * a value that is not one of them is decoded directly. */
+typedef struct code_table {
+  int used;
+  uint32_t key[256]; /* each code's float's bits */
+  double radiance[256];
+  uint8_t clipped[256];
+} code_table;
+
+static void code_table_init(code_table *t, const cf_decode *decode, int eight_bit) {
+  t->used = eight_bit;
+  if (!eight_bit) return;
+  uint8_t codes[256];
+  float values[256];
+  for (int c = 0; c < 256; ++c) codes[c] = (uint8_t)c;
+  image_scale_u8(codes, 256, values);
+  for (int c = 0; c < 256; ++c) {
+    double rgb[3];
+    t->clipped[c] = (uint8_t)(cf_decode_pixel(decode, &values[c], 1, rgb) & 1u);
+    t->radiance[c] = rgb[0];
+    memcpy(&t->key[c], &values[c], sizeof t->key[c]);
+  }
+}
+
+/* cf_decode_pixel, through the table where it holds every channel. */
+static unsigned decode_stored(const code_table *t, const cf_decode *decode, const float *stored,
+                              int channels, double radiance[3]) {
+  const int grey = channels < 3;
+  if (t->used) {
+    unsigned clipped = 0;
+    int c = 0;
+    for (; c < 3; ++c) {
+      const float value = stored[grey ? 0 : c], scaled = value * 255.0f;
+      if (!(scaled >= 0.0f && scaled <= 255.0f)) break;
+      const int code = (int)(scaled + 0.5f);
+      uint32_t bits;
+      memcpy(&bits, &value, sizeof bits);
+      if (bits != t->key[code]) break;
+      radiance[c] = t->radiance[code];
+      clipped |= (unsigned)t->clipped[code] << c;
+    }
+    if (c == 3) return clipped;
+  }
+  return cf_decode_pixel(decode, stored, channels, radiance);
 }
 
 /* Is pixel (x, y) inside the mask (first channel > 0.5)? */
@@ -98,28 +192,27 @@ double cf_observation_specularity(const cf_observations *obs, size_t k) {
   return best;
 }
 
-cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
-                                   const cf_image *mask, const cf_decode *decode, cf_error *err) {
-  cf_observations *o = &capture->obs;
-  cf_capture_image *info = &capture->images[k];
+void capture_add_observations(const cf_capture *capture, size_t k, const cf_image *image,
+                              const cf_image *mask, const cf_decode *decode, int eight_bit,
+                              cf_observations *o, image_observations *out) {
   const size_t slots = (size_t)o->lights;
   int bounds[4];
   capture_surface_bounds(capture, k, image->width, image->height, bounds);
-  cf_status s =
-      reserve(capture, (size_t)(bounds[2] - bounds[0]) * (size_t)(bounds[3] - bounds[1]), err);
-  if (s != CF_OK) return s;
+  code_table table;
+  code_table_init(&table, decode, eight_bit);
+  size_t i = o->count;
+  memset(out, 0, sizeof *out);
   for (int y = bounds[1]; y < bounds[3]; ++y) {
     for (int x = bounds[0]; x < bounds[2]; ++x) {
       surface_point point;
       surface_hit hit = capture_surface_at(capture, k, x, y, &point);
       if (hit == SURFACE_MISS) continue;
-      ++info->sphere_pixels;
+      ++out->sphere_pixels;
       if (hit == SURFACE_MARGIN || !in_mask(mask, x, y)) continue;
 
-      size_t i = o->count;
       const float *stored =
           image->pixels + ((size_t)y * (size_t)image->width + (size_t)x) * (size_t)image->channels;
-      unsigned clipped = cf_decode_pixel(decode, stored, image->channels, o->rgb + 3 * i);
+      unsigned clipped = decode_stored(&table, decode, stored, image->channels, o->rgb + 3 * i);
       int lit = lights_at(capture, k, &point, o->light_dir + 3 * slots * i,
                           o->irradiance + 3 * slots * i);
       memcpy(o->normal + 3 * i, point.normal, sizeof point.normal);
@@ -128,12 +221,12 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
       o->image[i] = (uint32_t)k;
       o->pixel[2 * i] = (float)(x + 0.5);
       o->pixel[2 * i + 1] = (float)(y + 0.5);
-      ++o->count;
-      ++info->observations;
-      info->clipped += clipped != 0;
+      ++i;
+      out->clipped += clipped != 0;
     }
   }
-  return CF_OK;
+  out->observations = i - o->count;
+  o->count = i;
 }
 
 /* ---- The screen: values that cannot be radiance (docs/captures.md) ----
@@ -165,6 +258,8 @@ cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image
  * lobe's 1/(4 c_o) and the Fresnel's rise); PEAK / c_o^1.5 is above all */
 #define PEAK 9e4
 #define MOST 0.5 /* more than half of the capture: the decoding is wrong */
+
+enum { SCREENERS = 2 }; /* threads for the images' bounds (2 cores) */
 
 double capture_radiance_bound(double cos_o) {
   return cos_o > 0.0 ? PEAK / (CF_PI * cos_o * sqrt(cos_o)) : INFINITY;
@@ -210,21 +305,6 @@ static double brightest_at(const cf_observations *o, size_t i) {
   return capture_radiance_bound(n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) * irradiance;
 }
 
-/* Copy observation `from` over `to` (to < from). */
-static void move_observation(cf_observations *o, size_t to, size_t from) {
-  const size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
-  memcpy(o->normal + 3 * to, o->normal + 3 * from, 3 * sizeof *o->normal);
-  memcpy(o->view + 3 * to, o->view + 3 * from, 3 * sizeof *o->view);
-  memcpy(o->light_dir + 3 * slots * to, o->light_dir + 3 * slots * from,
-         3 * slots * sizeof *o->light_dir);
-  memcpy(o->irradiance + 3 * slots * to, o->irradiance + 3 * slots * from,
-         3 * slots * sizeof *o->irradiance);
-  memcpy(o->rgb + 3 * to, o->rgb + 3 * from, 3 * sizeof *o->rgb);
-  o->flags[to] = o->flags[from];
-  o->image[to] = o->image[from];
-  memcpy(o->pixel + 2 * to, o->pixel + 2 * from, 2 * sizeof *o->pixel);
-}
-
 /* What was left out of one image (for its warning), or of the capture. */
 typedef struct left_out_counts {
   size_t low, high;
@@ -268,14 +348,13 @@ static void warn_left_out(cf_capture *capture, size_t k, const radiance_bounds *
 
 /* Leave out image k's observations [begin, end) that hold a value that is
  * not radiance, moving the rest down to *kept; add its counts to *all. */
-static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_t end, size_t *kept,
-                              left_out_counts *all, cf_error *err) {
+static void screen_image(cf_capture *capture, size_t k, size_t begin, size_t end,
+                         const radiance_bounds *bounds, size_t *kept, left_out_counts *all) {
   cf_observations *o = &capture->obs;
   cf_capture_image *info = &capture->images[k];
-  radiance_bounds b = {0};
-  cf_status s = bounds_of(capture, begin, end, &b, err);
-  if (s != CF_OK) return s;
+  const radiance_bounds b = *bounds;
   left_out_counts out = {0};
+  size_t run = begin; /* the kept observations [run, i) go to *kept on */
   for (size_t i = begin; i < end; ++i) {
     int low = 0, high = 0;
     double brightest = b.lights_known ? brightest_at(o, i) : INFINITY;
@@ -291,13 +370,16 @@ static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_
       out.low += (size_t)low;
       out.high += (size_t)(high && !low);
       info->clipped -= (o->flags[i] & CF_OBS_CLIPPED) != 0;
+      capture_move_observations(o, *kept, o, run, i - run);
+      *kept += i - run;
+      run = i + 1;
       continue;
     }
-    if (*kept != i) move_observation(o, *kept, i);
-    ++*kept;
     double z = brightest / b.sigma;
     all->signal += b.sigma > 0.0 ? z * z : INFINITY;
   }
+  capture_move_observations(o, *kept, o, run, end - run);
+  *kept += end - run;
   all->sigma = fmax(all->sigma, b.sigma);
   info->not_radiance = out.low + out.high;
   info->observations -= info->not_radiance;
@@ -306,7 +388,40 @@ static cf_status screen_image(cf_capture *capture, size_t k, size_t begin, size_
   all->low += out.low;
   all->high += out.high;
   if (out.highest > all->highest) all->highest = out.highest, all->limit = out.limit;
-  return CF_OK;
+}
+
+/* Every image's bounds of radiance, images side by side (each a quantile
+ * of its values: 0.1 s of s96's load alone). */
+typedef struct image_bounds {
+  const cf_capture *capture;
+  const size_t *begin; /* image k's observations: [begin[k], begin[k + 1]) */
+  radiance_bounds *bounds;
+  cf_status *status;
+  cf_error *errs;
+} image_bounds;
+
+static void bounds_of_image(void *user, int k) {
+  image_bounds *b = user;
+  b->status[k] = bounds_of(b->capture, b->begin[k], b->begin[k + 1], &b->bounds[k], &b->errs[k]);
+}
+
+/* begin[k]: image k's first observation (the images' counts), begin[n]
+ * the count; then each image's bounds. */
+static cf_status all_bounds(const cf_capture *capture, size_t *begin, radiance_bounds *bounds,
+                            cf_error *err) {
+  const size_t n = capture->spec.num_images;
+  cf_status *status = calloc(n ? n : 1, sizeof *status);
+  cf_error *errs = calloc(n ? n : 1, sizeof *errs);
+  cf_status s = status && errs ? CF_OK : cf_error_set(err, CF_ENOMEM, "out of memory");
+  begin[0] = 0;
+  for (size_t k = 0; k < n; ++k) begin[k + 1] = begin[k] + capture->images[k].observations;
+  image_bounds b = {capture, begin, bounds, status, errs};
+  if (s == CF_OK && n > 0) cf_parallel_for((int)n, SCREENERS, bounds_of_image, &b);
+  for (size_t k = 0; s == CF_OK && k < n; ++k)
+    if ((s = status[k]) != CF_OK && err) *err = errs[k];
+  free(status);
+  free(errs);
+  return s;
 }
 
 /* A point light or flash closer to the sphere's centre than its radius:
@@ -337,33 +452,36 @@ static int light_inside(const cf_capture *capture, size_t *image, int *light, do
   return 0;
 }
 
-/* How many observations some light reaches with some irradiance, how many
- * are lit (n·l > 0 as well) and of those how many measure a positive value. */
-typedef struct usable {
-  size_t irradiated, lit, positive;
-} usable;
-
-static usable count_usable(const cf_observations *o) {
-  usable u = {0, 0, 0};
+/* Is observation i reached by some light with some irradiance? */
+static int irradiated(const cf_observations *o, size_t i) {
   const size_t slots = (size_t)(o->lights > 0 ? o->lights : 1);
-  for (size_t i = 0; i < o->count; ++i) {
-    const double *e = o->irradiance + 3 * slots * i;
-    int irradiated = 0;
-    for (size_t j = 0; j < 3 * slots; ++j) irradiated |= e[j] > 0.0;
-    u.irradiated += (size_t)irradiated;
+  const double *e = o->irradiance + 3 * slots * i;
+  int any = 0;
+  for (size_t j = 0; j < 3 * slots; ++j) any |= e[j] > 0.0;
+  return any;
+}
+
+/* How many observations are lit (n·l > 0 and some irradiance), counted up
+ * to the first lit one that measures a positive value (*positive 1; the
+ * count is whole only when there is none, the one case it is reported). */
+static size_t lit_until_positive(const cf_observations *o, int *positive) {
+  size_t lit = 0;
+  *positive = 0;
+  for (size_t i = 0; i < o->count && !*positive; ++i) {
     if (o->flags[i] & CF_OBS_UNLIT) continue;
-    ++u.lit;
+    ++lit;
     const double *y = o->rgb + 3 * i;
-    u.positive += y[0] > 0.0 || y[1] > 0.0 || y[2] > 0.0;
+    *positive = y[0] > 0.0 || y[1] > 0.0 || y[2] > 0.0;
   }
-  return u;
+  return lit;
 }
 
 /* Refuse a capture that no light reaches (before the screen: with no
  * light every value is above what the lights can give). */
 static cf_status check_reached(const cf_capture *capture, cf_error *err) {
   const cf_observations *o = &capture->obs;
-  if (count_usable(o).irradiated > 0) return CF_OK;
+  for (size_t i = 0; i < o->count; ++i)
+    if (irradiated(o, i)) return CF_OK;
   return cf_error_set(err, CF_EINVAL,
                       "%s: lights: no light reaches the sphere: every light gives zero "
                       "irradiance at all %zu observations of the %zu images (are the lights' "
@@ -399,41 +517,46 @@ static cf_status check_left_out(const cf_capture *capture, size_t total, const l
 static cf_status check_usable(const cf_capture *capture, cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
   const cf_observations *o = &capture->obs;
-  usable u = count_usable(o);
+  int positive = 0;
+  const size_t lit = lit_until_positive(o, &positive);
   size_t k = 0;
   int j = 0;
   double distance = 0.0;
-  if (u.lit == 0 && light_inside(capture, &k, &j, &distance))
+  if (lit == 0 && light_inside(capture, &k, &j, &distance))
     return cf_error_set(err, CF_EINVAL,
                         "%s: lights: no observation is lit: at all %zu observations every light "
                         "is behind the surface; light %d of %s is inside the sphere (%g from "
                         "its centre, radius %g)",
                         spec->path, o->count, j + 1, spec->image_names[k], distance,
                         capture->radius);
-  if (u.lit == 0)
+  if (lit == 0)
     return cf_error_set(err, CF_EINVAL,
                         "%s: lights: no observation is lit: at all %zu observations of the %zu "
                         "images every light is behind the surface (n.l <= 0)",
                         spec->path, o->count, spec->num_images);
-  if (u.positive == 0)
+  if (!positive)
     return cf_error_set(err, CF_EINVAL,
                         "%s: colour: none of the %zu lit observations measures a positive value "
                         "(after black_level %g is subtracted): nothing to fit",
-                        spec->path, u.lit, spec->black_level);
+                        spec->path, lit, spec->black_level);
   return CF_OK;
 }
 
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err) {
   cf_observations *o = &capture->obs;
-  size_t total = o->count, kept = 0, begin = 0;
+  const size_t n = capture->spec.num_images, total = o->count;
+  size_t kept = 0;
   left_out_counts all = {0};
   cf_status s = check_reached(capture, err);
-  while (s == CF_OK && begin < total) {
-    size_t k = o->image[begin], end = begin;
-    while (end < total && o->image[end] == k) ++end;
-    s = screen_image(capture, k, begin, end, &kept, &all, err);
-    begin = end;
-  }
+  size_t *begin = malloc((n + 1) * sizeof *begin);
+  radiance_bounds *bounds = calloc(n ? n : 1, sizeof *bounds);
+  if (s == CF_OK && (!begin || !bounds)) s = cf_error_set(err, CF_ENOMEM, "out of memory");
+  if (s == CF_OK) s = all_bounds(capture, begin, bounds, err);
+  for (size_t k = 0; s == CF_OK && k < n; ++k)
+    if (begin[k + 1] > begin[k])
+      screen_image(capture, k, begin[k], begin[k + 1], &bounds[k], &kept, &all);
+  free(begin);
+  free(bounds);
   if (s != CF_OK) return s;
   o->count = kept;
   s = check_left_out(capture, total, &all, err);
