@@ -1,7 +1,8 @@
 /* The loaded capture (include/clayfit/capture.h), shared by the files that
  * build it: capture.c (orchestration), capture_views.c (cameras and
- * exposures), capture_lights.c, capture_surface.c (the sphere's surface)
- * and observations.c (the pixel loop). Private to src/capture. */
+ * exposures), capture_lights.c, capture_surface.c (the sphere's surface),
+ * observations.c (the pixel loop) and capture_screen.c (the screen).
+ * Private to src/capture. */
 #ifndef CLAYFIT_CAPTURE_INTERNAL_H
 #define CLAYFIT_CAPTURE_INTERNAL_H
 
@@ -148,7 +149,7 @@ void capture_add_observations(const cf_capture *capture, size_t k, const cf_imag
                               const cf_image *mask, const cf_decode *decode, int eight_bit,
                               cf_observations *o, image_observations *out);
 
-/* observations.c: leave out the values that cannot be radiance (counted
+/* capture_screen.c: leave out the values that cannot be radiance (counted
  * per image, a warning beyond a trace), then refuse a capture with no lit,
  * positive observation or mostly such values (CF_EINVAL, saying why). */
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
@@ -160,7 +161,7 @@ cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
 cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *options,
                                cf_error *err);
 
-/* observations.c: the brightest radiance any material of the ladder, with
+/* capture_screen.c: the brightest radiance any material of the ladder, with
  * any parameters inside docs/model.md §1.6's ranges, reflects per unit
  * irradiance (f·c_i at its largest over the light's direction) seen at
  * cos_o = n·v (infinite for cos_o <= 0). */
