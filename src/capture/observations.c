@@ -31,8 +31,9 @@ static size_t slots_of(const cf_observations *o) {
   return (size_t)(o->lights > 0 ? o->lights : 1);
 }
 
-/* Huge pages for a large array: first touching its pages (zeroing them)
- * is most of the kernel's part of loading, 4 KiB at a time otherwise. */
+/* Huge pages for a large array: its pages' first touch is most of the
+ * kernel's part of loading, 4 KiB at a time otherwise (s96: cpu 3.2 s
+ * with them, 5.6 s without, 5 alternating runs). */
 static void advise_huge(void *p, size_t bytes) {
 #ifdef MADV_HUGEPAGE
   const uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), huge = (uintptr_t)2 << 20;
@@ -86,7 +87,8 @@ void capture_move_observations(cf_observations *to, size_t at, const cf_observat
 
 /* An 8-bit image's 256 values (image_scale_u8's) decoded once each by
  * cf_decode_pixel: a look-up instead of a pow per channel, bit-identical;
- * a value that is not one of them is decoded directly. */
+ * a value that is not one of them is decoded directly. (Loading the demo:
+ * user time 0.92 of that without the table, 5 alternating runs.) */
 typedef struct code_table {
   int used;
   uint32_t key[256]; /* each code's float's bits */
