@@ -115,15 +115,7 @@ cf_status cf_capture_load(const char *path, const cf_capture_options *options, c
 
 void cf_capture_free(cf_capture *capture) {
   if (!capture) return;
-  cf_observations *o = &capture->obs;
-  free(o->normal);
-  free(o->view);
-  free(o->light_dir);
-  free(o->irradiance);
-  free(o->rgb);
-  free(o->flags);
-  free(o->image);
-  free(o->pixel);
+  capture_free_observations(&capture->obs);
   for (size_t i = 0; i < capture->num_warnings; ++i) free(capture->warnings[i]);
   free(capture->warnings);
   free(capture->views);

@@ -1,11 +1,12 @@
-/* Every image's pixels into observations (capture_internal.h): decoding a
- * file (its codec, the finite check, its mask) is the slow part and
- * needs nothing from the others, so READERS parts of core's thread pool
- * decode ahead, at most AHEAD images beyond the one being added, while
- * one part adds each image's observations in order (they append to the
- * capture's arrays, and their order is the images'). The first error in
- * image order is the one reported, as if the images were read one by one.
- * One mask file for every image (DiLiGenT's) is decoded once. */
+/* Every image's pixels into observations (capture_internal.h): an image
+ * (decoding its file and mask, its observations) needs nothing from the
+ * others, so WORKERS parts of core's thread pool read images side by side,
+ * each into its part's own arrays, then copied to the capture's after the
+ * previous image's (their place is known once the previous images' counts
+ * are): the order is the images'. Then, in image order, each image's checks
+ * and warnings: the first error in image order is the one reported, as if
+ * the images were read one by one. One mask file for every image
+ * (DiLiGenT's) is decoded once. */
 #define _POSIX_C_SOURCE 200809L /* stat, dev_t, ino_t */
 #include <pthread.h>
 #include <stdio.h>
@@ -16,35 +17,44 @@
 #include "capture_internal.h"
 #include "core/parallel.h"
 
-enum { READERS = 2, AHEAD = 4 };
+/* 2 parts on 2 cores: the demo loaded in 0.51 of one part's wall time (5
+ * alternating runs of a program loading it, busy machine) */
+enum { WORKERS = 2 };
 
-typedef struct decoded {
-  cf_image image, mask;
-  cf_image_info info;
-  cf_status status;
+/* What reading image k gave, for the accounting in image order. */
+typedef struct image_slot {
+  cf_status status; /* decoding the image and its mask */
   cf_error err;
-  int ready;
+  int width, height, channels;
   int mask_empty; /* its own mask has no usable pixel */
-} decoded;
+  cf_status exposure_status;
+  cf_error exposure_err;
+  double exposure;
+  int jpeg;
+  cf_status coding_status; /* of a JPEG's coding */
+  cf_error coding_err;
+  cf_jpeg_coding coding;
+  size_t bound; /* pixels in its capture_surface_bounds */
+  image_observations added;
+} image_slot;
 
-typedef struct read_ahead {
+typedef struct read_images {
   cf_capture *capture;
-  decoded *slots; /* one per image */
+  image_slot *slots; /* one per image */
   /* one mask for every image: decoded once (its status and error stand
    * for each image's) */
   int one_mask;
   cf_image shared_mask;
   cf_status shared_status;
   cf_error shared_err;
-  size_t count, next, added; /* images; the next to decode; those added */
-  int readers;               /* readers that have begun */
-  int stop;
+  size_t count, next;  /* images; the next to read */
+  size_t first_failed; /* the first image that failed (count: none) */
+  size_t placed;       /* images whose observations have their place */
+  size_t most;         /* the largest bound */
   pthread_mutex_t lock;
   pthread_cond_t changed;
   const cf_capture_options *options;
-  cf_status status; /* the adding part's */
-  cf_error *err;
-} read_ahead;
+} read_images;
 
 static cf_status check_mask(const cf_capture *capture, size_t k, const cf_image *image,
                             const cf_image *mask, cf_error *err) {
@@ -63,138 +73,153 @@ static int mask_is_empty(const cf_image *mask) {
 }
 
 /* Image k's own mask, or the one every image shares. */
-static const cf_image *mask_of(const read_ahead *r, const decoded *d) {
+static const cf_image *mask_of(const read_images *r, const cf_image *own) {
   if (!r->capture->spec.mask_paths) return NULL;
-  return r->one_mask ? &r->shared_mask : &d->mask;
+  return r->one_mask ? &r->shared_mask : own;
 }
 
 /* Image k's pixels and mask (reads only the capture's file names and the
  * shared mask). */
-static void decode(const read_ahead *r, size_t k, decoded *d) {
+static void decode(const read_images *r, size_t k, image_slot *d, cf_image *image,
+                   cf_image *mask, cf_image_info *info) {
   const cf_capture *capture = r->capture;
   const cf_capture_spec *spec = &capture->spec;
   /* the size its header declared when the headers were read (it must
    * not have changed since) */
   const int width = capture->images[k].width, height = capture->images[k].height;
-  d->status =
-      cf_image_read_sized(spec->image_paths[k], width, height, &d->image, &d->info, &d->err);
-  if (d->status == CF_OK && d->info.is_float) /* integer samples are finite */
-    d->status = cf_image_check_finite(&d->image, spec->image_paths[k], &d->err);
+  d->status = cf_image_read_sized(spec->image_paths[k], width, height, image, info, &d->err);
+  if (d->status == CF_OK && info->is_float) /* integer samples are finite */
+    d->status = cf_image_check_finite(image, spec->image_paths[k], &d->err);
+  d->width = image->width, d->height = image->height, d->channels = image->channels;
   if (d->status != CF_OK || !spec->mask_paths) return;
   if (!r->one_mask) {
-    d->status = cf_image_read_sized(spec->mask_paths[k], width, height, &d->mask, NULL, &d->err);
-    if (d->status == CF_OK) d->mask_empty = mask_is_empty(&d->mask);
+    d->status = cf_image_read_sized(spec->mask_paths[k], width, height, mask, NULL, &d->err);
+    if (d->status == CF_OK) d->mask_empty = mask_is_empty(mask);
   } else if (r->shared_status != CF_OK) {
     d->status = r->shared_status;
     d->err = r->shared_err;
   }
-  if (d->status == CF_OK) d->status = check_mask(capture, k, &d->image, mask_of(r, d), &d->err);
+  if (d->status == CF_OK) d->status = check_mask(capture, k, image, mask_of(r, mask), &d->err);
 }
 
-static void read_ahead_of_adding(read_ahead *r) {
+/* Image k read whole: decoded, its exposure, a JPEG's coding and its
+ * observations into `own` (reads the capture, writes only its slot). */
+static void read_image(read_images *r, size_t k, cf_observations *own) {
+  const cf_capture *capture = r->capture;
+  image_slot *d = &r->slots[k];
+  cf_image image = {0}, mask = {0};
+  cf_image_info info;
+  memset(&info, 0, sizeof info);
+  decode(r, k, d, &image, &mask, &info);
+  if (d->status == CF_OK)
+    d->exposure_status = capture_raw_exposure(capture, k, &info, &d->exposure, &d->exposure_err);
+  if (d->status == CF_OK && d->exposure_status == CF_OK) {
+    d->jpeg = strcmp(info.format, "jpeg") == 0;
+    if (d->jpeg)
+      d->coding_status = cf_jpeg_coding_read(capture->spec.image_paths[k], &d->coding,
+                                             &d->coding_err);
+    cf_decode decoding = capture_image_decode(capture, &info, d->exposure);
+    const int eight_bit = !info.is_float && info.bits_per_sample == 8;
+    capture_add_observations(capture, k, &image, mask_of(r, &mask), &decoding, eight_bit, own,
+                             &d->added);
+  }
+  cf_image_free(&image);
+  cf_image_free(&mask);
+}
+
+/* Image k's observations (in `own`) to their place in the capture's
+ * arrays, after the previous images' (which may be copied at the same
+ * time: the places do not overlap). Called with the lock held. */
+static void place(read_images *r, size_t k, const cf_observations *own) {
+  while (r->placed < k) pthread_cond_wait(&r->changed, &r->lock);
+  cf_observations *o = &r->capture->obs;
+  const size_t at = o->count;
+  o->count += own->count;
+  r->placed = k + 1;
+  pthread_cond_broadcast(&r->changed);
+  pthread_mutex_unlock(&r->lock);
+  capture_move_observations(o, at, own, 0, own->count);
   pthread_mutex_lock(&r->lock);
-  ++r->readers;
-  for (;;) {
-    while (!r->stop && r->next < r->count && r->next >= r->added + AHEAD)
-      pthread_cond_wait(&r->changed, &r->lock);
-    if (r->stop || r->next >= r->count) break;
+}
+
+/* One part's share: the next image not read, until there is none or one
+ * before it failed; its observations go through the part's own arrays
+ * (their place is known only when the previous images' counts are).
+ * Part 0 (this thread) reports the progress. */
+static void read_part(void *user, int part) {
+  read_images *r = user;
+  const cf_capture_options *options = r->options;
+  cf_observations own = {0, r->capture->obs.lights, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+  cf_error err;
+  const int room = capture_allocate_observations(&own, r->most, &err) == CF_OK;
+  pthread_mutex_lock(&r->lock);
+  while (r->next < r->count && r->next < r->first_failed) {
     size_t k = r->next++;
+    if (part == 0 && options && options->progress)
+      options->progress(options->progress_user, "reading images", k, r->count);
     pthread_mutex_unlock(&r->lock);
-    decode(r, k, &r->slots[k]);
+    own.count = 0;
+    if (room)
+      read_image(r, k, &own);
+    else
+      r->slots[k].status = cf_error_set(&r->slots[k].err, CF_ENOMEM,
+                                        "out of memory for %zu observations", r->most);
+    const int failed = r->slots[k].status != CF_OK || r->slots[k].exposure_status != CF_OK;
     pthread_mutex_lock(&r->lock);
-    r->slots[k].ready = 1;
-    pthread_cond_broadcast(&r->changed);
+    if (failed && k < r->first_failed) r->first_failed = k;
+    place(r, k, &own);
   }
   pthread_mutex_unlock(&r->lock);
+  capture_free_observations(&own);
 }
 
-/* Image k's observations from its decoded pixels. */
 /* A JPEG's coding, for the fit's model of its error: a file whose markers
  * cannot be read is fitted without that model, and the capture says so. */
-static void read_jpeg_coding(cf_capture *capture, size_t k) {
-  cf_jpeg_coding coding;
-  cf_error err;
+static void set_jpeg_coding(cf_capture *capture, size_t k, const image_slot *d) {
   cf_capture_image *image = &capture->images[k];
-  if (cf_jpeg_coding_read(capture->spec.image_paths[k], &coding, &err) != CF_OK) {
-    capture_warn(capture, "%s; its JPEG coding error is not modelled", err.message);
+  if (d->coding_status != CF_OK) {
+    capture_warn(capture, "%s; its JPEG coding error is not modelled", d->coding_err.message);
     return;
   }
-  image->jpeg_quality = coding.quality;
-  image->jpeg_exact = coding.exact;
-  image->jpeg_chroma = (int)coding.chroma;
+  image->jpeg_quality = d->coding.quality;
+  image->jpeg_exact = d->coding.exact;
+  image->jpeg_chroma = (int)d->coding.chroma;
 }
 
-static cf_status add(cf_capture *capture, size_t k, decoded *d, const cf_image *mask,
-                     cf_error *err) {
+/* Image k's part in the capture, its checks and warnings, in image order
+ * (as if the images were read one by one). */
+static cf_status account(cf_capture *capture, size_t k, const image_slot *d, cf_error *err) {
   const cf_capture_spec *spec = &capture->spec;
   if (d->status != CF_OK) {
     *err = d->err;
     return d->status;
   }
-  cf_status s = capture_check_size(capture, k, &d->image, err);
+  cf_image as_decoded = {d->width, d->height, d->channels, NULL};
+  cf_status s = capture_check_size(capture, k, &as_decoded, err);
   if (s == CF_OK && capture->normal_map.pixels &&
-      (capture->normal_map.width != d->image.width ||
-       capture->normal_map.height != d->image.height))
+      (capture->normal_map.width != d->width || capture->normal_map.height != d->height))
     s = cf_error_set(err, CF_EINVAL, "%s: the normal map is %d x %d pixels but %s is %d x %d",
                      spec->normal_map, capture->normal_map.width, capture->normal_map.height,
-                     spec->image_paths[k], d->image.width, d->image.height);
+                     spec->image_paths[k], d->width, d->height);
   if (s == CF_OK && d->mask_empty)
     capture_warn(capture,
                  "%s: no pixel of this mask is usable (all are 0.5 or less), so %s adds "
                  "no observation",
                  spec->mask_paths[k], spec->image_paths[k]);
-  double exposure = 1.0;
-  if (s == CF_OK) s = capture_raw_exposure(capture, k, &d->info, &exposure, err);
-  if (s == CF_OK) {
-    capture->raw_exposures[k] = exposure;
-    capture->images[k].exposure = exposure;
-    capture->images[k].jpeg = strcmp(d->info.format, "jpeg") == 0;
-    if (capture->images[k].jpeg) read_jpeg_coding(capture, k);
-    cf_decode decoding = capture_image_decode(capture, &d->info, exposure);
-    s = capture_add_observations(capture, k, &d->image, mask, &decoding, err);
+  if (s == CF_OK && d->exposure_status != CF_OK) {
+    *err = d->exposure_err;
+    s = d->exposure_status;
   }
-  return s;
-}
-
-/* Every image's observations in image order, each as soon as it is
- * decoded. While no reader has begun, the next image is decoded here: the
- * adding never waits on a reader that may not start, and runs alone when
- * no thread can be started. Stops at the first error. */
-static void add_in_order(read_ahead *r) {
-  const cf_capture_options *options = r->options;
-  cf_status s = CF_OK;
-  for (size_t k = 0; s == CF_OK && k < r->count; ++k) {
-    if (options && options->progress)
-      options->progress(options->progress_user, "reading images", k, r->count);
-    pthread_mutex_lock(&r->lock);
-    const int own = r->next == k && r->readers == 0;
-    if (own) r->next = k + 1;
-    while (!own && !r->slots[k].ready) pthread_cond_wait(&r->changed, &r->lock);
-    pthread_mutex_unlock(&r->lock);
-    if (own) decode(r, k, &r->slots[k]);
-    s = add(r->capture, k, &r->slots[k], mask_of(r, &r->slots[k]), r->err);
-    cf_image_free(&r->slots[k].image);
-    cf_image_free(&r->slots[k].mask);
-    pthread_mutex_lock(&r->lock);
-    r->added = k + 1;
-    pthread_cond_broadcast(&r->changed);
-    pthread_mutex_unlock(&r->lock);
-  }
-  pthread_mutex_lock(&r->lock); /* on an error, the readers stop at their next image */
-  r->stop = 1;
-  pthread_cond_broadcast(&r->changed);
-  pthread_mutex_unlock(&r->lock);
-  r->status = s;
-}
-
-/* Part 0 adds, on the caller's thread as before the pool (on a pool
- * thread, loading DiLiGenT peaked 12 MiB higher); the others decode ahead
- * of it. */
-static void read_part(void *user, int part) {
-  if (part == 0)
-    add_in_order(user);
-  else
-    read_ahead_of_adding(user);
+  if (s != CF_OK) return s;
+  capture->raw_exposures[k] = d->exposure;
+  cf_capture_image *image = &capture->images[k];
+  image->exposure = d->exposure;
+  image->jpeg = d->jpeg;
+  if (d->jpeg) set_jpeg_coding(capture, k, d);
+  image->sphere_pixels = d->added.sphere_pixels;
+  image->observations = d->added.observations;
+  image->clipped = d->added.clipped;
+  return CF_OK;
 }
 
 /* ---- every header before any pixel ---- */
@@ -403,49 +428,61 @@ cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *op
   return s;
 }
 
+/* Room for every image's observations: the sum of their bounds
+ * (capture_surface_bounds, from the headers' sizes); each image's bound
+ * and the largest. */
+static cf_status make_room(read_images *r, cf_error *err) {
+  cf_capture *capture = r->capture;
+  size_t total = 0;
+  for (size_t k = 0; k < r->count; ++k) {
+    int b[4];
+    capture_surface_bounds(capture, k, capture->images[k].width, capture->images[k].height, b);
+    r->slots[k].bound = (size_t)(b[2] - b[0]) * (size_t)(b[3] - b[1]);
+    total += r->slots[k].bound;
+    r->most = r->slots[k].bound > r->most ? r->slots[k].bound : r->most;
+  }
+  return capture_allocate_observations(&capture->obs, total, err);
+}
+
+/* The mask every image shares, decoded once. */
+static void read_shared_mask(read_images *r) {
+  cf_capture *capture = r->capture;
+  const char *path = capture->spec.mask_paths[0];
+  r->shared_status = cf_image_read_sized(path, capture->images[0].width,
+                                         capture->images[0].height, &r->shared_mask, NULL,
+                                         &r->shared_err);
+  if (r->shared_status == CF_OK && mask_is_empty(&r->shared_mask))
+    capture_warn(capture,
+                 "%s: no pixel of this mask is usable (all are 0.5 or less), so no "
+                 "image adds an observation",
+                 path);
+}
+
 cf_status capture_read_images(cf_capture *capture, const cf_capture_options *options,
                               cf_error *err) {
   size_t n = capture->spec.num_images;
-  read_ahead r;
+  read_images r;
   memset(&r, 0, sizeof r);
   r.capture = capture;
-  r.slots = calloc(n ? n : 1, sizeof(decoded));
-  r.count = n;
-  pthread_mutex_init(&r.lock, NULL);
-  pthread_cond_init(&r.changed, NULL);
-  if (!r.slots) {
+  r.count = r.first_failed = n;
+  r.options = options;
+  r.slots = calloc(n ? n : 1, sizeof *r.slots);
+  if (!r.slots) return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
+  cf_status s = make_room(&r, err);
+  if (s == CF_OK) {
+    pthread_mutex_init(&r.lock, NULL);
+    pthread_cond_init(&r.changed, NULL);
+    r.one_mask = shares_one_mask(capture);
+    if (r.one_mask) read_shared_mask(&r);
+    const int parts = n < WORKERS ? (int)n : WORKERS;
+    if (n > 0) cf_parallel_for(parts, parts, read_part, &r);
     pthread_mutex_destroy(&r.lock);
     pthread_cond_destroy(&r.changed);
-    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu images", n);
-  }
-  const char *const *masks = (const char *const *)capture->spec.mask_paths;
-  r.one_mask = shares_one_mask(capture);
-  if (r.one_mask) {
-    r.shared_status =
-        cf_image_read_sized(masks[0], capture->images[0].width, capture->images[0].height,
-                            &r.shared_mask, NULL, &r.shared_err);
-    if (r.shared_status == CF_OK && mask_is_empty(&r.shared_mask))
-      capture_warn(capture,
-                   "%s: no pixel of this mask is usable (all are 0.5 or less), so no "
-                   "image adds an observation",
-                   masks[0]);
-  }
-  cf_status s = CF_OK;
-  if (n > 0) {
-    r.options = options;
-    r.err = err;
-    const int parts = 1 + (n < READERS ? (int)n : READERS);
-    cf_parallel_for(parts, parts, read_part, &r);
-    s = r.status;
-  }
-  for (size_t k = 0; k < n; ++k) { /* what was decoded ahead of an error */
-    cf_image_free(&r.slots[k].image);
-    cf_image_free(&r.slots[k].mask);
+    for (size_t k = 0; s == CF_OK && k < n; ++k) s = account(capture, k, &r.slots[k], err);
+    if (s == CF_OK) capture_shrink_observations(&capture->obs);
   }
   free(r.slots);
   cf_image_free(&r.shared_mask);
-  pthread_mutex_destroy(&r.lock);
-  pthread_cond_destroy(&r.changed);
   if (s == CF_OK && options && options->progress)
     options->progress(options->progress_user, "reading images", n, n);
   return s;

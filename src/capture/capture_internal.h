@@ -1,7 +1,8 @@
 /* The loaded capture (include/clayfit/capture.h), shared by the files that
  * build it: capture.c (orchestration), capture_views.c (cameras and
- * exposures), capture_lights.c, capture_surface.c (the sphere's surface)
- * and observations.c (the pixel loop). Private to src/capture. */
+ * exposures), capture_lights.c, capture_surface.c (the sphere's surface),
+ * observations.c (the pixel loop) and capture_screen.c (the screen).
+ * Private to src/capture. */
 #ifndef CLAYFIT_CAPTURE_INTERNAL_H
 #define CLAYFIT_CAPTURE_INTERNAL_H
 
@@ -45,7 +46,6 @@ struct cf_capture {
                                x0, y0, x1, y1 (exclusive) */
 
   cf_observations obs;
-  size_t obs_capacity;
 
   char **warnings;
   size_t num_warnings;
@@ -128,11 +128,28 @@ surface_hit capture_surface_at_uv(const cf_capture *capture, size_t k, double u,
 void capture_surface_bounds(const cf_capture *capture, size_t k, int width, int height,
                             int bounds[4]);
 
-/* observations.c: decode image k and append its observations. */
-cf_status capture_add_observations(cf_capture *capture, size_t k, const cf_image *image,
-                                   const cf_image *mask, const cf_decode *decode, cf_error *err);
+/* observations.c: the arrays of n observations (o->lights set); shrunk
+ * to o->count; freed; observations [first, first + count) of `from` moved
+ * to [at, at + count) of `to` (the same arrays: at <= first). */
+cf_status capture_allocate_observations(cf_observations *o, size_t n, cf_error *err);
+void capture_shrink_observations(cf_observations *o);
+void capture_free_observations(cf_observations *o);
+void capture_move_observations(cf_observations *to, size_t at, const cf_observations *from,
+                               size_t first, size_t count);
 
-/* observations.c: leave out the values that cannot be radiance (counted
+/* What one image adds (its cf_capture_image counts). */
+typedef struct image_observations {
+  size_t observations, clipped, sphere_pixels;
+} image_observations;
+
+/* observations.c: decode image k and append its observations to o
+ * (room for its capture_surface_bounds' pixels after o->count); eight_bit:
+ * its samples are image_scale_u8's. */
+void capture_add_observations(const cf_capture *capture, size_t k, const cf_image *image,
+                              const cf_image *mask, const cf_decode *decode, int eight_bit,
+                              cf_observations *o, image_observations *out);
+
+/* capture_screen.c: leave out the values that cannot be radiance (counted
  * per image, a warning beyond a trace), then refuse a capture with no lit,
  * positive observation or mostly such values (CF_EINVAL, saying why). */
 cf_status capture_screen_observations(cf_capture *capture, cf_error *err);
@@ -146,7 +163,7 @@ void capture_measure_adjacent_turn(cf_capture *capture);
 cf_status capture_read_headers(cf_capture *capture, const cf_capture_options *options,
                                cf_error *err);
 
-/* observations.c: the brightest radiance any material of the ladder, with
+/* capture_screen.c: the brightest radiance any material of the ladder, with
  * any parameters inside docs/model.md §1.6's ranges, reflects per unit
  * irradiance (f·c_i at its largest over the light's direction) seen at
  * cos_o = n·v (infinite for cos_o <= 0). */

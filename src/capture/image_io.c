@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -37,15 +38,38 @@ static const unsigned char PNG_MAGIC[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a
 static const unsigned char EXR_MAGIC[4] = {0x76, 0x2f, 0x31, 0x01};
 static const unsigned char JPEG_MAGIC[3] = {0xff, 0xd8, 0xff};
 
+/* A file's reads go through a buffer of READ_BUFFER bytes (read_any):
+ * 64 KiB, not stdio's 4 KiB: loading s96 (192 opens of 692 KB PNGs) made
+ * 3511 reads, not 33153. */
+enum { READ_BUFFER = 1 << 16 };
+
+/* A stream at byte `from` moved on to byte `to` (>= from): read through a
+ * gap within the buffer's size (glibc's fseek costs a system call even
+ * inside the buffer: 16905 of them on s96), seek over a longer one. 0 at
+ * the file's end. */
+static int skip_to(FILE *file, long long from, long long to) {
+  if (to - from > READ_BUFFER) return fseek(file, (long)to, SEEK_SET) == 0;
+  unsigned char discard[4096];
+  for (long long left = to - from; left > 0;) {
+    const size_t n = left < (long long)sizeof discard ? (size_t)left : sizeof discard;
+    if (fread(discard, 1, n, file) != n) return 0;
+    left -= (long long)n;
+  }
+  return 1;
+}
+
 /* A PNG's chunks walked from their lengths without decoding: CF_EIO when
  * the file ends inside a chunk or before IEND, so that a truncated file is
- * refused before libpng decodes part of it. */
+ * refused before libpng decodes part of it. The stream is after the
+ * signature. */
 static cf_status check_png_chunks(const char *path, FILE *file, long long file_size,
                                   cf_error *err) {
-  long long at = 8; /* after the signature */
+  long long at = 8, position = 8; /* after the signature */
   for (;;) {
     unsigned char head[8];
-    if (fseek(file, (long)at, SEEK_SET) != 0 || fread(head, 1, 8, file) != 8)
+    const int got = skip_to(file, position, at) && fread(head, 1, 8, file) == 8;
+    position = at + 8;
+    if (!got)
       return cf_error_set(err, CF_EIO,
                           "%s: a truncated PNG: the file ends at byte %lld, before its IEND chunk",
                           path, file_size);
@@ -120,6 +144,8 @@ static cf_status read_any(const char *path, int width, int height, cf_image_head
   long long size;
   cf_status s = cf_open_regular_file(path, &file, &size, err);
   if (s != CF_OK) return s;
+  char *buffer = malloc(READ_BUFFER); /* (glibc ignores the size without one) */
+  if (buffer) setvbuf(file, buffer, _IOFBF, READ_BUFFER);
   unsigned char magic[8];
   const size_t got = fread(magic, 1, sizeof magic, file);
   image_reader reader;
@@ -129,6 +155,7 @@ static cf_status read_any(const char *path, int width, int height, cf_image_head
     s = reader(path, file, size, width, height, header, image, err);
   }
   fclose(file);
+  free(buffer);
   if (s != CF_OK || reader) return s;
   cf_status (*general)(const char *, int, int, cf_image_header *, cf_image *, cf_error *);
   *(void **)&general = oiio_function(path, "image_oiio_read", err);

@@ -1,4 +1,4 @@
-/* capture_radiance_bound (src/capture/observations.c), the brightest
+/* capture_radiance_bound (src/capture/capture_screen.c), the brightest
  * radiance per unit irradiance any material of the ladder reflects, seen at
  * c_o = n·v: a search over every model, its parameters inside their ranges
  * (docs/model.md §1.6; a third at each bound) and the light's direction,
