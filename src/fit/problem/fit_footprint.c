@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory.h"
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "problem.h"
@@ -204,8 +205,8 @@ static cf_status rebuild_pairs(fit_problem *p, int *samples, int gauss, cf_error
   for (size_t i = 0; i < r->count; ++i)
     begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
   size_t slots = begin[r->count];
-  cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
-  double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
+  cf_geometry *geometry = cf_malloc_large((slots ? slots : 1) * sizeof *geometry);
+  double *weight = cf_malloc_large(3 * (slots ? slots : 1) * sizeof *weight);
   int parts = parts_for(p);
   double *scratch = malloc(6 * lights * (size_t)parts * sizeof *scratch);
   if (!geometry || !weight || !scratch) {
