@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory.h"
 #include "core/order_statistics.h"
 #include "fit_plan.h"
 
@@ -275,7 +276,7 @@ cf_status cf_fit_predict(const cf_capture *capture, const cf_fit_result *fit,
   if (s != CF_OK) return s;
   size_t n = 3 * fit_problem_count(p);
   const double *inv_sigma = fit_problem_inv_sigma(p);
-  double *measured = malloc((n ? n : 1) * sizeof *measured);
+  double *measured = cf_malloc_large((n ? n : 1) * sizeof *measured);
   s = measured ? fit_problem_predict(p, prediction, measured, err)
                : cf_error_set(err, CF_ENOMEM, "out of memory");
   for (size_t i = 0; s == CF_OK && sigma && i < n; ++i) sigma[i] = 1.0 / inv_sigma[i];

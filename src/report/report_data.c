@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory.h"
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "report_internal.h"
@@ -68,12 +69,12 @@ void report_data_free(report_data *d) {
 /* The arrays of the observations and the images. */
 static cf_status allocate(report_data *d, cf_error *err) {
   size_t n = d->count ? d->count : 1, k = d->images ? d->images : 1;
-  d->prediction = malloc(3 * n * sizeof *d->prediction);
-  d->sigma = malloc(3 * n * sizeof *d->sigma);
-  d->residual = malloc(n * sizeof *d->residual);
+  d->prediction = cf_malloc_large(3 * n * sizeof *d->prediction);
+  d->sigma = cf_malloc_large(3 * n * sizeof *d->sigma);
+  d->residual = cf_malloc_large(n * sizeof *d->residual);
   d->mark = calloc(n, 1);
-  d->half_angle = malloc(n * sizeof *d->half_angle);
-  d->view_angle = malloc(n * sizeof *d->view_angle);
+  d->half_angle = cf_malloc_large(n * sizeof *d->half_angle);
+  d->view_angle = cf_malloc_large(n * sizeof *d->view_angle);
   d->censored = calloc(k, sizeof *d->censored);
   d->rejected = calloc(k, sizeof *d->rejected);
   d->observations = calloc(k, sizeof *d->observations);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory.h"
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "problem.h"
@@ -129,7 +130,20 @@ typedef struct rebuild_job {
   double *weight;
   int parts;
   double *scratch; /* 6 × lights per part */
+  const fit_rows *old; /* the pairs before: a centre there is copied */
 } rebuild_job;
+
+/* Row i's pairs at the pixel centre from the pairs before, when it had
+ * them there (the same fit_pairs_at, bit for bit: on the demo's report, the
+ * centres of 1.2·10⁶ observations took 0.56 s of CPU to compute again);
+ * 0 when it had samples. */
+static int copy_centre(const fit_rows *old, size_t i, cf_geometry *geometry, double *weight) {
+  if (old->samples && old->samples[i] != 1) return 0;
+  size_t first, slots = fit_rows_slot_range(old, i, &first);
+  memcpy(geometry, old->geometry + first, slots * sizeof *geometry);
+  memcpy(weight, old->weight + 3 * first, 3 * slots * sizeof *weight);
+  return 1;
+}
 
 static void rebuild_part(void *user, int part) {
   rebuild_job *job = user;
@@ -146,6 +160,7 @@ static void rebuild_part(void *user, int part) {
   for (size_t i = first; i < end; ++i) {
     size_t k = fit_rows_observation(&p->rows, i), at = job->begin[i];
     int n = job->samples[i];
+    if (n == 1 && copy_centre(job->old, i, geometry + at, weight + 3 * at)) continue;
     if (n == 1) { /* the pixel centre */
       fit_pairs_at(light_count, o->normal + 3 * k, o->view + 3 * k, o->light_dir + 3 * k * lights,
                    o->irradiance + 3 * k * lights, 1.0, geometry + at, weight + 3 * at);
@@ -190,8 +205,8 @@ static cf_status rebuild_pairs(fit_problem *p, int *samples, int gauss, cf_error
   for (size_t i = 0; i < r->count; ++i)
     begin[i + 1] = begin[i] + (size_t)samples[i] * (size_t)samples[i] * lights;
   size_t slots = begin[r->count];
-  cf_geometry *geometry = malloc((slots ? slots : 1) * sizeof *geometry);
-  double *weight = malloc(3 * (slots ? slots : 1) * sizeof *weight);
+  cf_geometry *geometry = cf_malloc_large((slots ? slots : 1) * sizeof *geometry);
+  double *weight = cf_malloc_large(3 * (slots ? slots : 1) * sizeof *weight);
   int parts = parts_for(p);
   double *scratch = malloc(6 * lights * (size_t)parts * sizeof *scratch);
   if (!geometry || !weight || !scratch) {
@@ -201,7 +216,7 @@ static cf_status rebuild_pairs(fit_problem *p, int *samples, int gauss, cf_error
     free(scratch);
     return cf_error_set(err, CF_ENOMEM, "out of memory for %zu footprint samples", slots);
   }
-  rebuild_job job = {p, samples, gauss, begin, geometry, weight, parts, scratch};
+  rebuild_job job = {p, samples, gauss, begin, geometry, weight, parts, scratch, r};
   cf_parallel_for(parts, p->threads, rebuild_part, &job);
   free(scratch);
   free(r->geometry);

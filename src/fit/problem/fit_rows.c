@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory.h"
 #include "core/parallel.h"
 #include "problem.h"
 
@@ -53,10 +54,10 @@ cf_status fit_rows_init(fit_rows *rows, const cf_observations *obs, const uint32
   rows->lights = obs->lights;
   size_t n = rows->count ? rows->count : 1, pairs = rows->count * (size_t)rows->lights;
   rows->slots = pairs;
-  rows->geometry = malloc((pairs ? pairs : 1) * sizeof *rows->geometry);
-  rows->weight = malloc(3 * (pairs ? pairs : 1) * sizeof *rows->weight);
-  rows->inv_sigma = malloc(3 * n * sizeof *rows->inv_sigma);
-  rows->y = malloc(3 * n * sizeof *rows->y);
+  rows->geometry = cf_malloc_large((pairs ? pairs : 1) * sizeof *rows->geometry);
+  rows->weight = cf_malloc_large(3 * (pairs ? pairs : 1) * sizeof *rows->weight);
+  rows->inv_sigma = cf_malloc_large(3 * n * sizeof *rows->inv_sigma);
+  rows->y = cf_malloc_large(3 * n * sizeof *rows->y);
   rows->image = malloc(n * sizeof *rows->image);
   rows->flags = malloc(n);
   if (!rows->geometry || !rows->weight || !rows->inv_sigma || !rows->y || !rows->image ||
