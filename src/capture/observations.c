@@ -3,16 +3,14 @@
  * the photo's value to linear radiance and record the observation: normal,
  * view, every light's direction and irradiance, RGB, flags; and the arrays
  * that hold them (the screen that follows: capture_screen.c). */
-#define _DEFAULT_SOURCE /* madvise */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include "capture_internal.h"
+#include "core/memory.h"
 #include "image_codec.h"
 
 /* The arrays of n observations (o->lights set) as they are: `field`,
@@ -31,25 +29,11 @@ static size_t slots_of(const cf_observations *o) {
   return (size_t)(o->lights > 0 ? o->lights : 1);
 }
 
-/* Huge pages for a large array: its pages' first touch is most of the
- * kernel's part of loading, 4 KiB at a time otherwise (s96: cpu 3.2 s
- * with them, 5.6 s without, 5 alternating runs). */
-static void advise_huge(void *p, size_t bytes) {
-#ifdef MADV_HUGEPAGE
-  const uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), huge = (uintptr_t)2 << 20;
-  uintptr_t begin = ((uintptr_t)p + page - 1) / page * page, end = (uintptr_t)p + bytes;
-  if (end > begin + huge) madvise((void *)begin, (end - begin) / page * page, MADV_HUGEPAGE);
-#else
-  (void)p, (void)bytes;
-#endif
-}
-
 cf_status capture_allocate_observations(cf_observations *o, size_t n, cf_error *err) {
   const size_t slots = slots_of(o), room = n ? n : 1;
 #define ALLOCATE(field, per)                                                   \
-  if (!(o->field = malloc(room * (per) * sizeof *o->field)))                   \
-    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", n); \
-  advise_huge(o->field, room * (per) * sizeof *o->field)
+  if (!(o->field = cf_malloc_large(room * (per) * sizeof *o->field)))          \
+    return cf_error_set(err, CF_ENOMEM, "out of memory for %zu observations", n)
   EACH_ARRAY(o, slots, ALLOCATE);
 #undef ALLOCATE
   return CF_OK;
