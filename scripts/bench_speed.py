@@ -63,27 +63,37 @@ def tone_captures(clayfit, work):
 
 
 def rows(after, work):
-    """name -> (description, argv after the clayfit program)"""
-    demo = synth(after, os.path.join(work, "demo"), [])
-    table = {"version": ("`clayfit --version` (the process start)", ["--version"]),
-             "demo": ("`clayfit fit` the demo (16 photos, 1.2·10⁶ observations)",
-                      ["--quiet", "fit", demo, "-o", os.path.join(work, "out")])}
+    """name -> a function making the row's captures and returning (description, argv after
+    the clayfit program); the captures are made only for the rows asked for."""
+    out = os.path.join(work, "out")
+
+    def demo():
+        return synth(after, os.path.join(work, "demo"), [])
+
+    def report():
+        fitted = os.path.join(work, "demo_fit")
+        subprocess.run([after, "--quiet", "fit", demo(), "-o", fitted], check=True,
+                       stdout=subprocess.DEVNULL)
+        return ("`clayfit report` of the demo's fit",
+                ["--quiet", "report", os.path.join(fitted, "fit.json"), "-o",
+                 os.path.join(work, "report")])
+
+    table = {
+        "version": lambda: ("`clayfit --version` (the process start)", ["--version"]),
+        "demo": lambda: ("`clayfit fit` the demo (16 photos, 1.2·10⁶ observations)",
+                         ["--quiet", "fit", demo(), "-o", out]),
+        "sphere96": lambda: ("`clayfit fit` a 96-image sphere (7.2·10⁶ observations)",
+                             ["--quiet", "fit", synth(after, os.path.join(work, "sphere96"),
+                                                      ["--images", "96"]), "-o", out]),
+        "tone": lambda: ("`clayfit fit` 12 8-bit sRGB photos, tone curve unknown",
+                         ["--quiet", "fit", tone_captures(after, work)[1], "-o", out]),
+        "report": report,
+    }
     if os.path.isdir(SHARED):
-        table["diligent"] = ("`clayfit fit` DiLiGenT's ball",
-                             ["--quiet", "fit", DILIGENT, "-o", os.path.join(work, "out")])
-    sphere = synth(after, os.path.join(work, "sphere96"), ["--images", "96"])
-    table["sphere96"] = ("`clayfit fit` a 96-image sphere (7.2·10⁶ observations)",
-                         ["--quiet", "fit", sphere, "-o", os.path.join(work, "out")])
-    known, unknown = tone_captures(after, work)
-    table["tone"] = ("`clayfit fit` 12 8-bit sRGB photos, tone curve unknown",
-                     ["--quiet", "fit", unknown, "-o", os.path.join(work, "out")])
-    fitted = os.path.join(work, "demo_fit")
-    subprocess.run([after, "--quiet", "fit", demo, "-o", fitted], check=True,
-                   stdout=subprocess.DEVNULL)
-    table["report"] = ("`clayfit report` of the demo's fit",
-                       ["--quiet", "report", os.path.join(fitted, "fit.json"), "-o",
-                        os.path.join(work, "report")])
-    return table, known
+        table["diligent"] = lambda: ("`clayfit fit` DiLiGenT's ball",
+                                     ["--quiet", "fit", DILIGENT, "-o", out])
+    order = ["version", "demo", "diligent", "sphere96", "tone", "report"]
+    return {name: table[name] for name in order if name in table}
 
 
 def pairs(first, second, count):
@@ -108,16 +118,17 @@ def main():
     ap.add_argument("--rows", default="")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
-    table, known = rows(args.after, args.work)
+    table = rows(args.after, args.work)
     wanted = [r for r in args.rows.split(",") if r] or list(table)
     print("| row | before (s) | after (s) | after / before |")
     print("|---|---|---|---|")
     for name in wanted:
-        description, argv = table[name]
+        description, argv = table[name]()
         b, a, ratio = pairs([args.before, *argv], [args.after, *argv], args.pairs)
         print(f"| {description} | {b:.3f} | {a:.3f} | {ratio:.2f} |")
         sys.stdout.flush()
         if name == "tone":  # the curve's cost: unknown against known, the after build
+            known = tone_captures(args.after, args.work)[0]
             argv_known = ["--quiet", "fit", known, "-o", os.path.join(args.work, "out")]
             k, u, r = pairs([args.after, *argv_known], [args.after, *argv], args.pairs)
             print(f"| the same photos with the curve known (after) | | {k:.3f} | "
